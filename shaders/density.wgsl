@@ -1,0 +1,50 @@
+// Density model after Schneider, as described in the Aetherius thesis. Pure functions on the
+// sampled noise; mirrors src/weather/profile.rs (tested there).
+
+// Height profiles of stratus, stratocumulus, cumulus, cumulonimbus: (base, full_bottom,
+// full_top, top) as fractions of the layer. Keep in sync with profile::PROFILES.
+const PROFILES = array<vec4f, 4>(
+    vec4f(0.0, 0.03, 0.08, 0.15),
+    vec4f(0.0, 0.06, 0.2, 0.35),
+    vec4f(0.02, 0.1, 0.4, 0.7),
+    vec4f(0.02, 0.1, 0.75, 1.0),
+);
+
+fn height_profile(h: f32, cloud_type: f32) -> f32 {
+    let x = clamp(cloud_type, 0.0, 1.0) * 3.0;
+    let i = min(u32(floor(x)), 2u);
+    let p = mix(PROFILES[i], PROFILES[i + 1u], x - f32(i));
+    let rise = clamp(remap(h, p.x, p.y, 0.0, 1.0), 0.0, 1.0);
+    let fall = clamp(remap(h, p.z, p.w, 1.0, 0.0), 0.0, 1.0);
+    return rise * fall;
+}
+
+fn layer_softening(h: f32, softness: f32) -> f32 {
+    if (softness <= 0.0) {
+        return select(0.0, 1.0, h >= 0.0 && h <= 1.0);
+    }
+    return clamp(h / softness, 0.0, 1.0) * clamp((1.0 - h) / softness, 0.0, 1.0);
+}
+
+// Base shape before detail erosion. `weather` = (coverage, type, density).
+fn base_density(h: f32, base: vec4f, weather: vec3f, coverage: f32, softness: f32) -> f32 {
+    if (h < 0.0 || h > 1.0) {
+        return 0.0;
+    }
+    let low_freq_fbm = base.g * 0.625 + base.b * 0.25 + base.a * 0.125;
+    let cloud = remap(base.r, low_freq_fbm - 1.0, 1.0, 0.0, 1.0) * height_profile(h, weather.y);
+    let c = coverage * weather.x;
+    if (c <= 0.0) {
+        return 0.0;
+    }
+    let covered = clamp(remap(cloud, 1.0 - c, 1.0, 0.0, 1.0), 0.0, 1.0);
+    return covered * layer_softening(h, softness);
+}
+
+// Detail erosion: wispy at the bottom, billowy higher up; returns density before extinction.
+fn eroded_density(h: f32, base: f32, detail: vec3f, coverage: f32, strength: f32, density: f32, weather_density: f32) -> f32 {
+    let high_freq_fbm = detail.r * 0.625 + detail.g * 0.25 + detail.b * 0.125;
+    var d = high_freq_fbm + (1.0 - 2.0 * high_freq_fbm) * clamp(h * 5.0, 0.0, 1.0);
+    d *= strength * exp(-coverage * 0.75);
+    return clamp(remap(base, d, 1.0, 0.0, 1.0), 0.0, 1.0) * density * weather_density;
+}

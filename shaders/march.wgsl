@@ -1,0 +1,233 @@
+// Ray-march pass (compute): per pixel, the in-scattered radiance L, the transmittance T and
+// a representative cloud depth. Composite later does out = scene * T + L.
+
+struct MarchUniforms {
+    inv_view_proj: mat4x4f,
+    camera: vec4f,          // xyz position (m), w: depth value of the near plane
+    planet: vec4f,          // xyz up, w: planet radius (m)
+    sun: vec4f,             // xyz direction toward the sun, w: illuminance
+    sun_color: vec4f,       // rgb, w: depth value meaning "far / sky"
+    layer: vec4f,           // bottom, top altitude (m), softness, max distance (m)
+    shape: vec4f,           // coverage, density, extinction (1/m), albedo
+    scales: vec4f,          // 1/base scale, 1/detail scale, 1/weather extent, detail strength
+    wind: vec4f,            // weather-map offset (m, tangent x/z), base-noise offset (m)
+    wind_detail: vec4f,     // detail-noise offset (m, tangent x/z), unused, unused
+    phase: vec4f,           // phase parameters (see phase.wgsl)
+    ms: vec4f,              // octaves, attenuation a, contribution b, eccentricity c
+    ambient_top: vec4f,     // rgb, w: light-march distance (m)
+    ambient_bottom: vec4f,  // rgb, w: light-march steps
+    march: vec4f,           // min steps, max steps, transmittance cutoff, jitter (0/1)
+    haze: vec4f,            // rgb, w: haze start distance (m)
+    misc: vec4f,            // 1/haze fade distance, phase model, debug mode, has depth (0/1)
+    debug: vec4f,           // slab bottom, slab top, debug density, unused
+    debug_sphere: vec4f,    // sphere center xyz, radius
+    tangent_x: vec4f,       // world-space horizontal axis for the weather map, w: frame index
+    tangent_z: vec4f,       // second horizontal axis, w: unused
+}
+
+@group(0) @binding(0) var<uniform> u: MarchUniforms;
+@group(0) @binding(1) var base_tex: texture_3d<f32>;
+@group(0) @binding(2) var detail_tex: texture_3d<f32>;
+@group(0) @binding(3) var weather_tex: texture_2d<f32>;
+@group(0) @binding(4) var blue_noise: texture_2d<f32>;
+@group(0) @binding(5) var noise_sampler: sampler;
+//!SCENE_DEPTH_BINDING
+@group(0) @binding(7) var march_out: texture_storage_2d<rgba16float, write>;
+@group(0) @binding(8) var depth_out: texture_storage_2d<r32float, write>;
+
+const DEBUG_OFF: u32 = 0u;
+const DEBUG_SLAB: u32 = 1u;
+const DEBUG_SPHERE: u32 = 2u;
+
+fn debug_mode() -> u32 {
+    return u32(u.misc.z);
+}
+
+fn unproject(ndc: vec2f, depth: f32) -> vec4f {
+    return u.inv_view_proj * vec4f(ndc, depth, 1.0);
+}
+
+// Distance from the camera to the scene point behind this pixel (mirrors frame::scene_distance).
+fn scene_distance(ndc: vec2f, depth: f32) -> f32 {
+    if (depth == u.sun_color.w) {
+        return 3.0e38;
+    }
+    let p = unproject(ndc, depth);
+    if (abs(p.w) < 1e-20) {
+        return 3.0e38;
+    }
+    return length(p.xyz / p.w - u.camera.xyz);
+}
+
+// Unitless density at p (σt = density × extinction); `cheap` skips the detail erosion.
+fn sample_density(p: vec3f, cheap: bool) -> f32 {
+    let up = u.planet.xyz;
+    let radius = u.planet.w;
+    let mode = debug_mode();
+    if (mode == DEBUG_SLAB) {
+        let h = altitude(p, up, radius);
+        return select(0.0, u.debug.z, h >= u.debug.x && h <= u.debug.y);
+    }
+    if (mode == DEBUG_SPHERE) {
+        return select(0.0, u.debug.z, length(p - u.debug_sphere.xyz) <= u.debug_sphere.w);
+    }
+    let h = altitude(p, up, radius);
+    let hf = (h - u.layer.x) / (u.layer.y - u.layer.x);
+    if (hf < 0.0 || hf > 1.0) {
+        return 0.0;
+    }
+    let horizontal = vec2f(dot(p, u.tangent_x.xyz), dot(p, u.tangent_z.xyz));
+    let weather = textureSampleLevel(weather_tex, noise_sampler, (horizontal + u.wind.xy) * u.scales.z, 0.0);
+    let q = vec3f(horizontal.x + u.wind.z, h, horizontal.y + u.wind.w);
+    let base = textureSampleLevel(base_tex, noise_sampler, q * u.scales.x, 0.0);
+    let b = base_density(hf, base, weather.rgb, u.shape.x, u.layer.z);
+    if (b <= 0.0 || cheap) {
+        return b * u.shape.y * weather.b;
+    }
+    let qd = vec3f(horizontal.x + u.wind_detail.x, h, horizontal.y + u.wind_detail.y);
+    let detail = textureSampleLevel(detail_tex, noise_sampler, qd * u.scales.y, 0.0).rgb;
+    return eroded_density(hf, b, detail, u.shape.x, u.scales.w, u.shape.y, weather.b);
+}
+
+// Where a ray from p toward the sun leaves the medium (m).
+fn light_exit(p: vec3f, d: vec3f) -> f32 {
+    let mode = debug_mode();
+    if (mode == DEBUG_SPHERE) {
+        let s = ball_segment(p, d, u.debug_sphere.xyz, u.debug_sphere.w, 1e9);
+        return select(0.0, s.a.y, s.count > 0u);
+    }
+    let top = select(u.layer.y, u.debug.y, mode == DEBUG_SLAB);
+    let r = sphere_roots(p, d, u.planet.xyz, u.planet.w, top);
+    return select(0.0, max(r.t1, 0.0), r.hit);
+}
+
+// Optical depth toward the sun: steps doubling in length, partitioning [0, exit] exactly so a
+// homogeneous medium integrates without error. The planet's shadow is total.
+fn sun_optical_depth(p: vec3f) -> f32 {
+    let d = u.sun.xyz;
+    let ground = sphere_roots(p, d, u.planet.xyz, u.planet.w, 0.0);
+    if (ground.hit && ground.t0 > 0.0) {
+        return 1e4;
+    }
+    let length_total = min(light_exit(p, d), u.ambient_top.w);
+    let n = u32(u.ambient_bottom.w);
+    let unit = length_total / (exp2(f32(n)) - 1.0);
+    var t = 0.0;
+    var tau = 0.0;
+    var len = unit;
+    for (var i = 0u; i < n; i++) {
+        tau += sample_density(p + d * (t + 0.5 * len), false) * len;
+        t += len;
+        len *= 2.0;
+    }
+    return tau * u.shape.z;
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn march(@builtin(global_invocation_id) id: vec3u) {
+    let dims = textureDimensions(march_out);
+    if (any(id.xy >= dims)) {
+        return;
+    }
+    let ndc = vec2f(
+        (f32(id.x) + 0.5) / f32(dims.x) * 2.0 - 1.0,
+        1.0 - (f32(id.y) + 0.5) / f32(dims.y) * 2.0,
+    );
+    let cam = u.camera.xyz;
+    let near_p = unproject(ndc, u.camera.w);
+    let dir = normalize(near_p.xyz / near_p.w - cam);
+
+    var max_t = u.layer.w;
+    if (u.misc.w > 0.5) {
+        max_t = min(max_t, scene_distance(ndc, load_scene_depth(id.xy)));
+    }
+
+    let up = u.planet.xyz;
+    let radius = u.planet.w;
+    var seg: Segments;
+    switch (debug_mode()) {
+        case 1u: { seg = shell_segments(cam, dir, up, radius, u.debug.x, u.debug.y, max_t); }
+        case 2u: { seg = ball_segment(cam, dir, u.debug_sphere.xyz, u.debug_sphere.w, max_t); }
+        default: { seg = shell_segments(cam, dir, up, radius, u.layer.x, u.layer.y, max_t); }
+    }
+    let len_a = select(0.0, seg.a.y - seg.a.x, seg.count > 0u);
+    let len_b = select(0.0, seg.b.y - seg.b.x, seg.count > 1u);
+    let total = len_a + len_b;
+    if (total <= 0.0 || (u.shape.x <= 0.0 && debug_mode() == DEBUG_OFF)) {
+        textureStore(march_out, id.xy, vec4f(0.0, 0.0, 0.0, 1.0));
+        textureStore(depth_out, id.xy, vec4f(0.0));
+        return;
+    }
+
+    // Step count grows with the length inside the layer (long horizon paths get more steps).
+    let thickness = u.layer.y - u.layer.x;
+    let n_f = mix(u.march.x, u.march.y, clamp(total / (4.0 * thickness), 0.0, 1.0));
+    let n = max(u32(ceil(n_f)), 1u);
+    let dt = total / f32(n);
+
+    // Blue-noise jitter of the sample position inside each step, rotated per frame by the
+    // golden ratio so that temporal accumulation sees fresh offsets.
+    var jitter = 0.5;
+    if (u.march.w > 0.5) {
+        let bn_size = textureDimensions(blue_noise);
+        let bn = textureLoad(blue_noise, id.xy % bn_size, 0).r;
+        jitter = fract(bn + u.tangent_x.w * 0.61803398875);
+    }
+
+    // Phase per multiple-scattering octave (Wrenninge: eccentricity scaled by c^i).
+    let cos_theta = dot(u.sun.xyz, dir);
+    let octaves = u32(u.ms.x);
+    var phase_oct: array<f32, 8>;
+    var c_i = 1.0;
+    for (var i = 0u; i < octaves; i++) {
+        phase_oct[i] = phase_eval(u32(u.misc.y), u.phase, cos_theta, c_i);
+        c_i *= u.ms.w;
+    }
+    let sun_radiance = u.sun.w * u.sun_color.rgb;
+
+    var radiance = vec3f(0.0);
+    var transmittance = 1.0;
+    var depth_weighted = 0.0;
+    for (var i = 0u; i < n; i++) {
+        let s = (f32(i) + jitter) * dt;
+        let t = select(seg.b.x + (s - len_a), seg.a.x + s, s < len_a);
+        let p = cam + dir * t;
+        let density = sample_density(p, false);
+        if (density <= 0.0) {
+            continue;
+        }
+        let sigma_t = density * u.shape.z;
+        let tau = sun_optical_depth(p);
+        // Wrenninge 2015 multiple-scattering octaves.
+        var ms = 0.0;
+        var a_i = 1.0;
+        var b_i = 1.0;
+        for (var o = 0u; o < octaves; o++) {
+            ms += b_i * phase_oct[o] * exp(-a_i * tau);
+            a_i *= u.ms.y;
+            b_i *= u.ms.z;
+        }
+        let hf = clamp((altitude(p, up, radius) - u.layer.x) / thickness, 0.0, 1.0);
+        let ambient = mix(u.ambient_bottom.rgb, u.ambient_top.rgb, hf);
+        let source = u.shape.w * sigma_t * (sun_radiance * ms + ambient);
+        // Hillaire 2016 energy-conserving integration over the step.
+        let step_t = exp(-sigma_t * dt);
+        radiance += transmittance * source * (1.0 - step_t) / sigma_t;
+        depth_weighted += transmittance * (1.0 - step_t) * t;
+        transmittance *= step_t;
+        if (transmittance < u.march.z) {
+            break;
+        }
+    }
+
+    let opacity = 1.0 - transmittance;
+    var cloud_depth = 0.0;
+    if (opacity > 1e-4) {
+        cloud_depth = depth_weighted / opacity;
+        // Aerial perspective: distant clouds take the haze color.
+        let fade = exp(-max(cloud_depth - u.haze.w, 0.0) * u.misc.x);
+        radiance = radiance * fade + (1.0 - fade) * opacity * u.haze.rgb;
+    }
+    textureStore(march_out, id.xy, vec4f(radiance, transmittance));
+    textureStore(depth_out, id.xy, vec4f(cloud_depth));
+}

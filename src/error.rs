@@ -1,0 +1,84 @@
+//! The one error type of the crate. Every fallible public call returns `Result<_, Error>`;
+//! nothing in Nimbus panics on bad input.
+
+/// What went wrong, with a message meant for a human reading a log.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A field of [`crate::Settings`] is out of range or not finite.
+    #[error("invalid setting `{field}`: {reason}")]
+    InvalidSettings {
+        /// Path of the offending field, e.g. `layer.bottom_altitude`.
+        field: &'static str,
+        /// Why it was refused.
+        reason: String,
+    },
+    /// A per-frame input (camera, sun, time) is unusable.
+    #[error("invalid frame input `{field}`: {reason}")]
+    InvalidFrame {
+        /// Name of the offending input, e.g. `camera.view`.
+        field: &'static str,
+        /// Why it was refused.
+        reason: String,
+    },
+    /// A render target has the wrong size, usage or dimension.
+    #[error("invalid target `{target}`: {reason}")]
+    InvalidTarget {
+        /// Which target: `scene_color`, `scene_depth` or `output`.
+        target: &'static str,
+        /// Why it was refused.
+        reason: String,
+    },
+    /// A render target's texture format cannot be used for that role.
+    #[error("unsupported format {format:?} for `{target}`; supported: {supported}")]
+    UnsupportedFormat {
+        /// Which target.
+        target: &'static str,
+        /// The format that was given.
+        format: wgpu::TextureFormat,
+        /// The formats that would be accepted.
+        supported: &'static str,
+    },
+    /// `encode` was called before any successful `prepare`.
+    #[error("renderer not prepared: call prepare() with the frame inputs before encode()")]
+    NotPrepared,
+    /// No GPU adapter (software Vulkan included) could be found.
+    #[error("no GPU adapter found: {0}")]
+    NoAdapter(String),
+    /// The adapter refused to create a device.
+    #[error("could not create a GPU device: {0}")]
+    RequestDevice(String),
+    /// wgpu reported a validation or out-of-memory error.
+    #[error("GPU error: {0}")]
+    Gpu(String),
+    /// Reading a texture back to the CPU failed.
+    #[error("GPU readback failed: {0}")]
+    Readback(String),
+    /// Writing or encoding an image failed.
+    #[error("image output failed: {0}")]
+    Image(String),
+}
+
+/// Shorthand used throughout the crate.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+pub(crate) fn invalid_setting(field: &'static str, reason: impl Into<String>) -> Error {
+    Error::InvalidSettings {
+        field,
+        reason: reason.into(),
+    }
+}
+
+pub(crate) fn invalid_frame(field: &'static str, reason: impl Into<String>) -> Error {
+    Error::InvalidFrame {
+        field,
+        reason: reason.into(),
+    }
+}
+
+pub(crate) fn invalid_target(target: &'static str, reason: impl Into<String>) -> Error {
+    Error::InvalidTarget {
+        target,
+        reason: reason.into(),
+    }
+}

@@ -1,0 +1,446 @@
+//! Per-frame inputs: camera, depth convention, sun and time.
+//!
+//! Matrices are column-major glam matrices in a right-handed world (meters). The projection
+//! maps to wgpu clip space: x, y in [-1, 1], depth in [0, 1]. Reversed-Z and an infinite far
+//! plane are declared with [`DepthConvention`], never guessed; `prepare` checks the declaration
+//! against the projection matrix and refuses a mismatch.
+
+use glam::{Mat4, Vec3, Vec4};
+
+use crate::error::{invalid_frame, Result};
+
+/// How the host's depth buffer encodes distance.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DepthConvention {
+    /// Near plane at depth 1, far (or infinity) at depth 0. Default false.
+    pub reversed_z: bool,
+    /// The projection has no far plane (depth reaches its far value only at infinity).
+    /// Default false.
+    pub infinite_far: bool,
+}
+
+impl DepthConvention {
+    /// The depth value of "nothing here" (the far plane or infinity): 1, or 0 for reversed-Z.
+    /// Pixels holding it are treated as sky: clouds are marched to their full distance.
+    pub fn far_value(&self) -> f32 {
+        if self.reversed_z {
+            0.0
+        } else {
+            1.0
+        }
+    }
+
+    /// The depth value of the near plane.
+    pub fn near_value(&self) -> f32 {
+        1.0 - self.far_value()
+    }
+}
+
+/// The camera of the frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// World-to-view matrix (right-handed, camera looks down -Z).
+    pub view: Mat4,
+    /// View-to-clip perspective projection (wgpu clip space, depth in [0, 1]).
+    pub projection: Mat4,
+    /// How the projection encodes depth.
+    pub depth: DepthConvention,
+}
+
+/// The sun.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sun {
+    /// Direction from the scene toward the sun (normalised on use).
+    pub direction: Vec3,
+    /// Linear RGB tint, each channel >= 0. Default white.
+    pub color: Vec3,
+    /// Illuminance in lux-like linear units (>= 0). Output radiance scales with it.
+    pub illuminance: f32,
+}
+
+impl Default for Sun {
+    fn default() -> Self {
+        Self {
+            direction: Vec3::new(0.3, 0.6, -0.74).normalize(),
+            color: Vec3::ONE,
+            illuminance: 10.0,
+        }
+    }
+}
+
+/// Everything that changes per frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FrameInputs {
+    /// The camera.
+    pub camera: Camera,
+    /// The sun.
+    pub sun: Sun,
+    /// Time in seconds, chosen by the host (it drives the wind; there is no hidden clock).
+    pub time: f32,
+}
+
+/// Camera quantities derived once per frame and used by both CPU mirror and shader.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct CameraDerived {
+    pub inv_view_proj: Mat4,
+    pub view_proj: Mat4,
+    pub position: Vec3,
+}
+
+fn matrix_finite(field: &'static str, m: &Mat4) -> Result<()> {
+    if m.is_finite() {
+        Ok(())
+    } else {
+        Err(invalid_frame(field, "contains NaN or infinity"))
+    }
+}
+
+fn invertible(field: &'static str, m: &Mat4) -> Result<Mat4> {
+    let det = m.determinant();
+    let inv = m.inverse();
+    // Scale-free test: the inverse must exist and round-trip to the identity.
+    let round_trip = (*m * inv - Mat4::IDENTITY)
+        .to_cols_array()
+        .iter()
+        .fold(0.0f32, |a, v| a.max(v.abs()));
+    if det == 0.0
+        || !det.is_finite()
+        || !inv.is_finite()
+        || round_trip.is_nan()
+        || round_trip >= 1e-3
+    {
+        return Err(invalid_frame(
+            field,
+            format!("is not invertible (det {det}, |M M^-1 - I| = {round_trip})"),
+        ));
+    }
+    Ok(inv)
+}
+
+/// View distance of the depth value `far_value`, in f64 (`f64::INFINITY` at infinity).
+fn far_plane_distance(projection: &Mat4, far_value: f32) -> f64 {
+    let inv = projection.as_dmat4().inverse();
+    let p = inv * glam::DVec4::new(0.0, 0.0, far_value as f64, 1.0);
+    if p.w.abs() < 1e-15 {
+        return f64::INFINITY;
+    }
+    let d = -p.z / p.w;
+    if d <= 0.0 {
+        f64::INFINITY
+    } else {
+        d
+    }
+}
+
+/// NDC depth of a point `dist` meters in front of the camera.
+fn depth_at(projection: &Mat4, dist: f32) -> f32 {
+    let c = *projection * Vec4::new(0.0, 0.0, -dist, 1.0);
+    c.z / c.w
+}
+
+impl Camera {
+    /// Checks the matrices and that `depth` matches what the projection really does.
+    pub(crate) fn derive(&self) -> Result<CameraDerived> {
+        matrix_finite("camera.view", &self.view)?;
+        matrix_finite("camera.projection", &self.projection)?;
+        let inv_view = invertible("camera.view", &self.view)?;
+        invertible("camera.projection", &self.projection)?;
+        if self.projection.w_axis.w.abs() > 1e-6 || self.projection.z_axis.w.abs() < 1e-6 {
+            return Err(invalid_frame(
+                "camera.projection",
+                "must be a perspective projection (clip w = -view z)",
+            ));
+        }
+        let (near, mid) = (
+            depth_at(&self.projection, 1e-3),
+            depth_at(&self.projection, 1e3),
+        );
+        let reversed = mid < near;
+        if reversed != self.depth.reversed_z {
+            return Err(invalid_frame(
+                "camera.depth.reversed_z",
+                format!(
+                    "is {} but the projection maps depth {} with distance",
+                    self.depth.reversed_z,
+                    if reversed { "decreasing" } else { "increasing" }
+                ),
+            ));
+        }
+        // Where the far value lands: infinitely far only for an infinite projection. In f64 so
+        // that a legitimately huge but finite far plane is not mistaken for infinity.
+        let far_dist = far_plane_distance(&self.projection, self.depth.far_value());
+        let infinite = far_dist > 1e9;
+        if infinite != self.depth.infinite_far {
+            return Err(invalid_frame(
+                "camera.depth.infinite_far",
+                format!(
+                    "is {} but the projection has {} far plane",
+                    self.depth.infinite_far,
+                    if infinite {
+                        "an infinite".to_string()
+                    } else {
+                        format!("a finite ({far_dist:.1} m)")
+                    }
+                ),
+            ));
+        }
+        let view_proj = self.projection * self.view;
+        let inv_view_proj = invertible("camera.view * camera.projection", &view_proj)?;
+        Ok(CameraDerived {
+            inv_view_proj,
+            view_proj,
+            position: inv_view.w_axis.truncate(),
+        })
+    }
+}
+
+impl Sun {
+    pub(crate) fn validate(&self) -> Result<Vec3> {
+        if !self.direction.is_finite() || self.direction.length() < 1e-6 {
+            return Err(invalid_frame(
+                "sun.direction",
+                format!("must be a finite non-zero vector, got {}", self.direction),
+            ));
+        }
+        if !self.color.is_finite() || self.color.min_element() < 0.0 {
+            return Err(invalid_frame(
+                "sun.color",
+                format!("must be finite and non-negative, got {}", self.color),
+            ));
+        }
+        if !self.illuminance.is_finite() || self.illuminance < 0.0 {
+            return Err(invalid_frame(
+                "sun.illuminance",
+                format!("must be finite and >= 0, got {}", self.illuminance),
+            ));
+        }
+        Ok(self.direction.normalize())
+    }
+}
+
+impl FrameInputs {
+    pub(crate) fn validate(&self) -> Result<(CameraDerived, Vec3)> {
+        if !self.time.is_finite() {
+            return Err(invalid_frame(
+                "time",
+                format!("must be finite, got {}", self.time),
+            ));
+        }
+        Ok((self.camera.derive()?, self.sun.validate()?))
+    }
+}
+
+/// Distance in meters from the camera to the scene point behind NDC position (x, y) with
+/// depth `depth`, or `f32::INFINITY` where the depth buffer holds the far value (the sky).
+/// Mirrors `scene_distance` in `shaders/march.wgsl`.
+pub fn scene_distance(
+    ndc_x: f32,
+    ndc_y: f32,
+    depth: f32,
+    inv_view_proj: &Mat4,
+    camera_pos: Vec3,
+    convention: DepthConvention,
+) -> f32 {
+    if depth == convention.far_value() {
+        return f32::INFINITY;
+    }
+    let p = *inv_view_proj * Vec4::new(ndc_x, ndc_y, depth, 1.0);
+    if p.w.abs() < 1e-20 {
+        return f32::INFINITY;
+    }
+    (p.truncate() / p.w - camera_pos).length()
+}
+
+/// View-space linear depth (distance along the view axis) of an NDC depth value, from the
+/// inverse projection; `f32::INFINITY` for the far value.
+pub fn linearize_depth(depth: f32, projection: &Mat4, convention: DepthConvention) -> f32 {
+    if depth == convention.far_value() {
+        return f32::INFINITY;
+    }
+    let p = projection.inverse() * Vec4::new(0.0, 0.0, depth, 1.0);
+    if p.w.abs() < 1e-20 {
+        return f32::INFINITY;
+    }
+    -p.z / p.w
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Error;
+
+    const N: f32 = 0.5;
+    const F: f32 = 5_000.0;
+
+    fn conv(reversed_z: bool, infinite_far: bool) -> DepthConvention {
+        DepthConvention {
+            reversed_z,
+            infinite_far,
+        }
+    }
+
+    type Case = (Mat4, DepthConvention, fn(f32) -> f32);
+
+    fn projections() -> [Case; 4] {
+        let fov = 1.0;
+        [
+            // Standard [0,1]: z = n f / (f - d (f - n)).
+            (
+                Mat4::perspective_rh(fov, 1.5, N, F),
+                conv(false, false),
+                |d| N * F / (F - d * (F - N)),
+            ),
+            // Reversed: z = n f / (n + d (f - n)).
+            (
+                Mat4::perspective_rh(fov, 1.5, F, N),
+                conv(true, false),
+                |d| N * F / (N + d * (F - N)),
+            ),
+            // Infinite: z = n / (1 - d).
+            (
+                Mat4::perspective_infinite_rh(fov, 1.5, N),
+                conv(false, true),
+                |d| N / (1.0 - d),
+            ),
+            // Infinite reversed: z = n / d.
+            (
+                Mat4::perspective_infinite_reverse_rh(fov, 1.5, N),
+                conv(true, true),
+                |d| N / d,
+            ),
+        ]
+    }
+
+    #[test]
+    fn linearization_matches_closed_forms_per_convention() {
+        for (proj, c, analytic) in projections() {
+            for z in [0.7f32, 3.0, 50.0, 800.0, 4_000.0] {
+                let d = depth_at(&proj, z);
+                let lin = linearize_depth(d, &proj, c);
+                let expect = analytic(d);
+                assert!((lin - z).abs() / z < 2e-3, "{c:?} z={z}: {lin}");
+                assert!(
+                    (lin - expect).abs() / z < 2e-3,
+                    "{c:?} z={z}: {lin} vs {expect}"
+                );
+            }
+            assert_eq!(linearize_depth(c.far_value(), &proj, c), f32::INFINITY);
+        }
+    }
+
+    #[test]
+    fn scene_distance_is_distance_along_the_ray() {
+        for (proj, c, _) in projections() {
+            let eye = Vec3::new(10.0, 1_000.0, -30.0);
+            let view = Mat4::look_at_rh(eye, eye + Vec3::new(1.0, 0.2, 0.3), Vec3::Y);
+            let inv = (proj * view).inverse();
+            // A world point, projected, must come back at its true distance.
+            let p = eye + Vec3::new(200.0, 60.0, 50.0);
+            let clip = proj * view * p.extend(1.0);
+            let ndc = clip.truncate() / clip.w;
+            let dist = scene_distance(ndc.x, ndc.y, ndc.z, &inv, eye, c);
+            let truth = (p - eye).length();
+            assert!(
+                (dist - truth).abs() / truth < 2e-3,
+                "{c:?}: {dist} vs {truth}"
+            );
+            assert_eq!(
+                scene_distance(0.0, 0.0, c.far_value(), &inv, eye, c),
+                f32::INFINITY
+            );
+        }
+    }
+
+    fn camera(projection: Mat4, depth: DepthConvention) -> Camera {
+        Camera {
+            view: Mat4::look_at_rh(
+                Vec3::new(0.0, 10.0, 0.0),
+                Vec3::new(0.0, 10.0, -1.0),
+                Vec3::Y,
+            ),
+            projection,
+            depth,
+        }
+    }
+
+    fn field_of(r: Result<CameraDerived>) -> &'static str {
+        match r {
+            Err(Error::InvalidFrame { field, .. }) => field,
+            other => panic!("expected InvalidFrame, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn declared_convention_must_match_projection() {
+        for (proj, c, _) in projections() {
+            camera(proj, c).derive().unwrap();
+            let wrong_rev = conv(!c.reversed_z, c.infinite_far);
+            assert_eq!(
+                field_of(camera(proj, wrong_rev).derive()),
+                "camera.depth.reversed_z"
+            );
+            let wrong_inf = conv(c.reversed_z, !c.infinite_far);
+            assert_eq!(
+                field_of(camera(proj, wrong_inf).derive()),
+                "camera.depth.infinite_far"
+            );
+        }
+    }
+
+    #[test]
+    fn bad_matrices_are_refused() {
+        let good = Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0);
+        let c = conv(false, false);
+        let mut nan = good;
+        nan.x_axis.x = f32::NAN;
+        assert_eq!(field_of(camera(nan, c).derive()), "camera.projection");
+        assert_eq!(
+            field_of(camera(Mat4::ZERO, c).derive()),
+            "camera.projection"
+        );
+        let mut cam = camera(good, c);
+        cam.view = Mat4::ZERO;
+        assert_eq!(field_of(cam.derive()), "camera.view");
+        let ortho = Mat4::orthographic_rh(-1.0, 1.0, -1.0, 1.0, 0.1, 100.0);
+        assert_eq!(field_of(camera(ortho, c).derive()), "camera.projection");
+    }
+
+    #[test]
+    fn bad_sun_and_time_are_refused() {
+        let cam = camera(
+            Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0),
+            conv(false, false),
+        );
+        let mut f = FrameInputs {
+            camera: cam,
+            sun: Sun::default(),
+            time: 0.0,
+        };
+        f.validate().unwrap();
+        f.sun.direction = Vec3::ZERO;
+        assert!(matches!(
+            f.validate(),
+            Err(Error::InvalidFrame {
+                field: "sun.direction",
+                ..
+            })
+        ));
+        f.sun = Sun {
+            illuminance: f32::NAN,
+            ..Sun::default()
+        };
+        assert!(matches!(
+            f.validate(),
+            Err(Error::InvalidFrame {
+                field: "sun.illuminance",
+                ..
+            })
+        ));
+        f.sun = Sun::default();
+        f.time = f32::INFINITY;
+        assert!(matches!(
+            f.validate(),
+            Err(Error::InvalidFrame { field: "time", .. })
+        ));
+    }
+}

@@ -1,0 +1,335 @@
+//! The ray-march pass: uniforms, pipelines (one per scene-depth binding variant) and the
+//! per-frame dispatch writing radiance + transmittance and cloud depth.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+
+use super::noise::NoiseTextures;
+use super::shaders::{pass_source, DepthKind};
+use crate::frame::{CameraDerived, FrameInputs};
+use crate::settings::{DebugDensity, Settings};
+
+/// Layout must match `MarchUniforms` in shaders/march.wgsl field for field.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub(crate) struct MarchUniforms {
+    inv_view_proj: [f32; 16],
+    camera: [f32; 4],
+    planet: [f32; 4],
+    sun: [f32; 4],
+    sun_color: [f32; 4],
+    layer: [f32; 4],
+    shape: [f32; 4],
+    scales: [f32; 4],
+    wind: [f32; 4],
+    wind_detail: [f32; 4],
+    phase: [f32; 4],
+    ms: [f32; 4],
+    ambient_top: [f32; 4],
+    ambient_bottom: [f32; 4],
+    march: [f32; 4],
+    haze: [f32; 4],
+    misc: [f32; 4],
+    debug: [f32; 4],
+    debug_sphere: [f32; 4],
+    tangent_x: [f32; 4],
+    tangent_z: [f32; 4],
+}
+
+/// Two horizontal axes perpendicular to `up` (X and Z for +Y up).
+pub(crate) fn tangent_basis(up: Vec3) -> (Vec3, Vec3) {
+    let reference = if up.x.abs() < 0.9 { Vec3::X } else { Vec3::Z };
+    let tz = reference.cross(up).normalize();
+    (up.cross(tz), tz)
+}
+
+/// Wind offset after `time` seconds, wrapped to one tile so f32 keeps its precision forever.
+fn wind_offset(settings: &Settings, time: f32, tile: f32) -> [f32; 2] {
+    let dir = settings.wind.direction.normalize_or_zero().as_dvec2();
+    let travel = dir * (settings.wind.speed as f64 * time as f64);
+    // Sample at p - travel so features move with the wind.
+    let t = tile as f64;
+    [
+        (-travel.x).rem_euclid(t) as f32,
+        (-travel.y).rem_euclid(t) as f32,
+    ]
+}
+
+impl MarchUniforms {
+    pub(crate) fn new(
+        settings: &Settings,
+        frame: &FrameInputs,
+        cam: &CameraDerived,
+        sun_dir: Vec3,
+        frame_index: u32,
+        has_depth: bool,
+    ) -> Self {
+        let up = settings.planet.up.normalize();
+        let (tx, tz) = tangent_basis(up);
+        let s = settings;
+        let (phase_params, phase_model) = s.lighting.phase.gpu_params();
+        let (debug_mode, debug, sphere) = match s.debug_density {
+            DebugDensity::Off => (0.0, [0.0; 4], [0.0; 4]),
+            DebugDensity::Slab {
+                bottom_altitude,
+                top_altitude,
+                density,
+            } => (1.0, [bottom_altitude, top_altitude, density, 0.0], [0.0; 4]),
+            DebugDensity::Sphere {
+                center,
+                radius,
+                density,
+            } => (
+                2.0,
+                [0.0, 0.0, density, 0.0],
+                center.extend(radius).to_array(),
+            ),
+        };
+        let weather_off = wind_offset(s, frame.time, s.weather_map.extent);
+        let base_off = wind_offset(s, frame.time, s.clouds.base_scale);
+        let detail_off = wind_offset(s, frame.time, s.clouds.detail_scale);
+        let inv_fade = if s.haze.fade_distance.is_finite() {
+            1.0 / s.haze.fade_distance
+        } else {
+            0.0
+        };
+        let depth = frame.camera.depth;
+        let v4 = |v: Vec3, w: f32| v.extend(w).to_array();
+        Self {
+            inv_view_proj: Mat4::to_cols_array(&cam.inv_view_proj),
+            camera: v4(cam.position, depth.near_value()),
+            planet: v4(up, s.planet.radius),
+            sun: v4(sun_dir, frame.sun.illuminance),
+            sun_color: v4(frame.sun.color, depth.far_value()),
+            layer: [
+                s.layer.bottom_altitude,
+                s.layer.top_altitude,
+                s.clouds.layer_softness,
+                s.march.max_distance,
+            ],
+            shape: [
+                s.clouds.coverage,
+                s.clouds.density,
+                s.clouds.extinction,
+                s.clouds.albedo,
+            ],
+            scales: [
+                1.0 / s.clouds.base_scale,
+                1.0 / s.clouds.detail_scale,
+                1.0 / s.weather_map.extent,
+                s.clouds.detail_strength,
+            ],
+            wind: [weather_off[0], weather_off[1], base_off[0], base_off[1]],
+            wind_detail: [detail_off[0], detail_off[1], 0.0, 0.0],
+            phase: phase_params,
+            ms: {
+                let m = &s.lighting.multiple_scattering;
+                [
+                    m.octaves as f32,
+                    m.attenuation,
+                    m.contribution,
+                    m.eccentricity,
+                ]
+            },
+            ambient_top: v4(s.lighting.ambient_top, s.lighting.light_distance),
+            ambient_bottom: v4(s.lighting.ambient_bottom, s.lighting.light_steps as f32),
+            march: [
+                s.march.min_steps as f32,
+                s.march.max_steps as f32,
+                s.march.transmittance_cutoff,
+                if s.march.jitter { 1.0 } else { 0.0 },
+            ],
+            haze: v4(s.haze.color, s.haze.start_distance),
+            misc: [
+                inv_fade,
+                phase_model as f32,
+                debug_mode,
+                if has_depth { 1.0 } else { 0.0 },
+            ],
+            debug,
+            debug_sphere: sphere,
+            tangent_x: v4(tx, (frame_index % 1024) as f32),
+            tangent_z: v4(tz, 0.0),
+        }
+    }
+}
+
+impl MarchUniforms {
+    /// Whether the march clips rays at the scene depth (known only once targets are given).
+    pub(crate) fn set_has_depth(&mut self, has_depth: bool) {
+        self.misc[3] = if has_depth { 1.0 } else { 0.0 };
+    }
+}
+
+pub(crate) struct MarchPipeline {
+    pub layout: wgpu::BindGroupLayout,
+    pub pipeline: wgpu::ComputePipeline,
+}
+
+fn texture_entry(
+    binding: u32,
+    sample_type: wgpu::TextureSampleType,
+    dim: wgpu::TextureViewDimension,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: dim,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+fn storage_entry(binding: u32, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::StorageTexture {
+            access: wgpu::StorageTextureAccess::WriteOnly,
+            format,
+            view_dimension: wgpu::TextureViewDimension::D2,
+        },
+        count: None,
+    }
+}
+
+impl MarchPipeline {
+    pub(crate) fn new(device: &wgpu::Device, kind: DepthKind) -> Self {
+        use wgpu::TextureSampleType as S;
+        use wgpu::TextureViewDimension as D;
+        let filterable = S::Float { filterable: true };
+        let depth_type = match kind {
+            DepthKind::Depth => S::Depth,
+            DepthKind::R32Float => S::Float { filterable: false },
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("nimbus march"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: wgpu::BufferSize::new(
+                            std::mem::size_of::<MarchUniforms>() as u64,
+                        ),
+                    },
+                    count: None,
+                },
+                texture_entry(1, filterable, D::D3),
+                texture_entry(2, filterable, D::D3),
+                texture_entry(3, filterable, D::D2),
+                texture_entry(4, filterable, D::D2),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 5,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+                texture_entry(6, depth_type, D::D2),
+                storage_entry(7, wgpu::TextureFormat::Rgba16Float),
+                storage_entry(8, wgpu::TextureFormat::R32Float),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("nimbus march"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("nimbus march"),
+            source: wgpu::ShaderSource::Wgsl(pass_source("march", kind).into()),
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("nimbus march"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("march"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        Self { layout, pipeline }
+    }
+
+    /// Records the march dispatch for a `width`×`height` image.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn record(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        uniforms: &wgpu::Buffer,
+        noise: &NoiseTextures,
+        scene_depth: &wgpu::TextureView,
+        march_out: &wgpu::TextureView,
+        depth_out: &wgpu::TextureView,
+        size: (u32, u32),
+    ) {
+        let tex = |b, v| wgpu::BindGroupEntry {
+            binding: b,
+            resource: wgpu::BindingResource::TextureView(v),
+        };
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("nimbus march"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: uniforms.as_entire_binding(),
+                },
+                tex(1, &noise.base_view),
+                tex(2, &noise.detail_view),
+                tex(3, &noise.weather_view),
+                tex(4, &noise.blue_noise_view),
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::Sampler(&noise.sampler),
+                },
+                tex(6, scene_depth),
+                tex(7, march_out),
+                tex(8, depth_out),
+            ],
+        });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("nimbus march"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &bind, &[]);
+        pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uniforms_match_the_wgsl_struct_size() {
+        // 1 mat4 + 20 vec4 in shaders/march.wgsl.
+        assert_eq!(std::mem::size_of::<MarchUniforms>(), 64 + 20 * 16);
+        let src = pass_source("march", DepthKind::Depth);
+        let start = src.find("struct MarchUniforms").unwrap();
+        let body = &src[start..start + src[start..].find('}').unwrap()];
+        assert_eq!(body.matches(": vec4f").count(), 20);
+        assert_eq!(body.matches(": mat4x4f").count(), 1);
+    }
+
+    #[test]
+    fn tangent_basis_is_orthonormal() {
+        for up in [
+            Vec3::Y,
+            Vec3::Z,
+            Vec3::X,
+            Vec3::new(1.0, 2.0, 3.0).normalize(),
+        ] {
+            let (x, z) = tangent_basis(up);
+            assert!(x.dot(up).abs() < 1e-6 && z.dot(up).abs() < 1e-6 && x.dot(z).abs() < 1e-6);
+            assert!((x.length() - 1.0).abs() < 1e-6 && (z.length() - 1.0).abs() < 1e-6);
+        }
+        assert_eq!(tangent_basis(Vec3::Y), (Vec3::X, Vec3::Z));
+    }
+}

@@ -1,0 +1,120 @@
+//! WGSL sources. WGSL has no imports, so each pass is the concatenation of shared modules and
+//! its own file; `PASSES` is the one list of what goes into what.
+
+/// A scene-depth binding variant of the march pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(crate) enum DepthKind {
+    /// A depth-format texture (`texture_depth_2d`), or no depth at all (a dummy is bound).
+    Depth,
+    /// An `R32Float` color texture holding depth values.
+    R32Float,
+}
+
+macro_rules! shader {
+    ($name:literal) => {
+        ($name, include_str!(concat!("../../shaders/", $name)))
+    };
+}
+
+pub(crate) const COMMON: (&str, &str) = shader!("common.wgsl");
+pub(crate) const NOISE: (&str, &str) = shader!("noise.wgsl");
+pub(crate) const ATMOSPHERE: (&str, &str) = shader!("atmosphere.wgsl");
+pub(crate) const PHASE: (&str, &str) = shader!("phase.wgsl");
+pub(crate) const DENSITY: (&str, &str) = shader!("density.wgsl");
+pub(crate) const NOISE_BAKE: (&str, &str) = shader!("noise_bake.wgsl");
+pub(crate) const WEATHER_BAKE: (&str, &str) = shader!("weather_bake.wgsl");
+pub(crate) const MIP_DOWNSAMPLE: (&str, &str) = shader!("mip_downsample.wgsl");
+pub(crate) const MARCH: (&str, &str) = shader!("march.wgsl");
+pub(crate) const COMPOSITE: (&str, &str) = shader!("composite.wgsl");
+pub(crate) const COMPOSITE_SEPARATE: (&str, &str) = shader!("composite_separate.wgsl");
+
+/// The passes and the modules each is built from, in order.
+pub(crate) const PASSES: &[(&str, &[(&str, &str)])] = &[
+    ("noise_bake", &[COMMON, NOISE, NOISE_BAKE]),
+    ("weather_bake", &[COMMON, NOISE, WEATHER_BAKE]),
+    ("mip_downsample", &[MIP_DOWNSAMPLE]),
+    ("march", &[COMMON, ATMOSPHERE, PHASE, DENSITY, MARCH]),
+    ("composite_in_place", &[COMPOSITE]),
+    ("composite_separate", &[COMPOSITE, COMPOSITE_SEPARATE]),
+];
+
+const DEPTH_PLACEHOLDER: &str = "//!SCENE_DEPTH_BINDING";
+
+fn depth_binding(kind: DepthKind) -> &'static str {
+    match kind {
+        DepthKind::Depth => {
+            "@group(0) @binding(6) var scene_depth: texture_depth_2d;\n\
+             fn load_scene_depth(c: vec2u) -> f32 { return textureLoad(scene_depth, c, 0); }"
+        }
+        DepthKind::R32Float => {
+            "@group(0) @binding(6) var scene_depth: texture_2d<f32>;\n\
+             fn load_scene_depth(c: vec2u) -> f32 { return textureLoad(scene_depth, c, 0).r; }"
+        }
+    }
+}
+
+/// The full source of a pass; the march pass gets its scene-depth binding variant.
+pub(crate) fn pass_source(pass: &str, depth: DepthKind) -> String {
+    let modules = PASSES
+        .iter()
+        .find(|(name, _)| *name == pass)
+        .map(|(_, m)| *m)
+        .unwrap_or_else(|| unreachable!("unknown pass {pass}"));
+    let mut src = String::new();
+    for (name, text) in modules {
+        src.push_str(&format!("// ---- {name}\n"));
+        src.push_str(text);
+        src.push('\n');
+    }
+    src.replace(DEPTH_PLACEHOLDER, depth_binding(depth))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn validate(label: &str, src: &str) {
+        let module = naga::front::wgsl::parse_str(src)
+            .unwrap_or_else(|e| panic!("{label}: {}", e.emit_to_string(src)));
+        naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::default(),
+        )
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{label}: {}", e.emit_to_string(src)));
+    }
+
+    #[test]
+    fn every_pass_parses_and_validates() {
+        for (pass, _) in PASSES {
+            for kind in [DepthKind::Depth, DepthKind::R32Float] {
+                validate(pass, &pass_source(pass, kind));
+            }
+        }
+    }
+
+    #[test]
+    fn every_wgsl_file_belongs_to_a_validated_pass() {
+        let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/shaders");
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let name = entry.unwrap().file_name().into_string().unwrap();
+            if !name.ends_with(".wgsl") {
+                continue;
+            }
+            let used = PASSES
+                .iter()
+                .any(|(_, modules)| modules.iter().any(|(m, _)| *m == name));
+            assert!(
+                used,
+                "{name} is in shaders/ but in no pass, so nothing validates it"
+            );
+        }
+    }
+
+    #[test]
+    fn self_contained_modules_validate_alone() {
+        for (name, src) in [COMMON, MIP_DOWNSAMPLE, COMPOSITE] {
+            validate(name, src);
+        }
+    }
+}

@@ -1,0 +1,360 @@
+//! [`Headless`]: Nimbus on a device of its own (software Vulkan is fine), rendering into
+//! textures it owns and reading them back. For tests, tools and hosts without a GPU API.
+
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use half::f16;
+
+use crate::error::{invalid_target, Error, Result};
+use crate::frame::FrameInputs;
+use crate::gpu::noise::NoiseVolume;
+use crate::gpu::readback::read_texture;
+use crate::renderer::{ColorTargets, Renderer, Targets};
+use crate::settings::Settings;
+
+/// Largest edge Headless accepts for its targets.
+pub const MAX_HEADLESS_SIZE: u32 = 8192;
+
+struct OwnedTargets {
+    width: u32,
+    height: u32,
+    scene: wgpu::Texture,
+    depth: wgpu::Texture,
+    output: wgpu::Texture,
+    has_depth: bool,
+}
+
+/// A renderer with its own device and targets: scene color (RGBA16F), scene depth (R32F,
+/// clip-space depth in the camera's convention) and output (RGBA16F, linear HDR).
+pub struct Headless {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    adapter_info: wgpu::AdapterInfo,
+    renderer: Renderer,
+    errors: Arc<Mutex<Vec<String>>>,
+    targets: Option<OwnedTargets>,
+    in_place: bool,
+}
+
+/// Creates a device on the first adapter found. Backends follow `WGPU_BACKEND` when set
+/// (e.g. `vulkan`), else the platform's primary ones. wgpu's debug flag stays off: Debian's
+/// validation layers misread naga's debug SPIR-V.
+pub fn create_device() -> Result<(wgpu::Device, wgpu::Queue, wgpu::AdapterInfo)> {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = wgpu::Backends::PRIMARY;
+    desc.flags = wgpu::InstanceFlags::empty();
+    let instance = wgpu::Instance::new(desc.with_env());
+    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+        power_preference: wgpu::PowerPreference::HighPerformance,
+        force_fallback_adapter: false,
+        compatible_surface: None,
+        ..Default::default()
+    }))
+    .map_err(|e| {
+        Error::NoAdapter(format!(
+            "{e} (on Linux without a GPU, install Mesa's software Vulkan: mesa-vulkan-drivers)"
+        ))
+    })?;
+    let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("nimbus"),
+        required_features: features,
+        required_limits: adapter.limits(),
+        ..Default::default()
+    }))
+    .map_err(|e| Error::RequestDevice(e.to_string()))?;
+    Ok((device, queue, adapter.get_info()))
+}
+
+fn to_f16(data: &[[f32; 4]]) -> Vec<u8> {
+    data.iter()
+        .flat_map(|p| p.iter().flat_map(|v| f16::from_f32(*v).to_le_bytes()))
+        .collect()
+}
+
+fn from_f16(bytes: &[u8]) -> Vec<[f32; 4]> {
+    bytes
+        .chunks_exact(8)
+        .map(|c| {
+            let v = |i: usize| f16::from_le_bytes([c[2 * i], c[2 * i + 1]]).to_f32();
+            [v(0), v(1), v(2), v(3)]
+        })
+        .collect()
+}
+
+impl Headless {
+    /// Creates a device of its own and a renderer on it.
+    pub fn new(settings: Settings) -> Result<Self> {
+        settings.validate()?;
+        let (device, queue, adapter_info) = create_device()?;
+        // Nothing may panic: wgpu errors outside our scopes are collected and reported.
+        let errors = Arc::new(Mutex::new(Vec::new()));
+        let sink = errors.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            if let Ok(mut v) = sink.lock() {
+                v.push(e.to_string());
+            }
+        }));
+        let renderer = Renderer::new(&device, &queue, settings)?;
+        Ok(Self {
+            device,
+            queue,
+            adapter_info,
+            renderer,
+            errors,
+            targets: None,
+            in_place: false,
+        })
+    }
+
+    /// The adapter in use (name, backend, driver).
+    pub fn adapter_info(&self) -> &wgpu::AdapterInfo {
+        &self.adapter_info
+    }
+
+    /// The renderer, e.g. to change settings.
+    pub fn renderer_mut(&mut self) -> &mut Renderer {
+        &mut self.renderer
+    }
+
+    /// The owned device.
+    pub fn device(&self) -> &wgpu::Device {
+        &self.device
+    }
+
+    /// Composite onto the scene texture itself (blend path) instead of a separate output.
+    pub fn set_in_place(&mut self, in_place: bool) {
+        self.in_place = in_place;
+    }
+
+    fn take_errors(&self) -> Result<()> {
+        let mut v = self
+            .errors
+            .lock()
+            .map_err(|_| Error::Gpu("error log poisoned".into()))?;
+        if v.is_empty() {
+            Ok(())
+        } else {
+            Err(Error::Gpu(std::mem::take(&mut *v).join("; ")))
+        }
+    }
+
+    /// (Re)creates the targets at `width`×`height`. The scene starts black with no depth.
+    pub fn resize(&mut self, width: u32, height: u32) -> Result<()> {
+        for (name, v) in [("width", width), ("height", height)] {
+            if v == 0 || v > MAX_HEADLESS_SIZE {
+                return Err(invalid_target(
+                    "output",
+                    format!("{name} must be in 1..={MAX_HEADLESS_SIZE}, got {v}"),
+                ));
+            }
+        }
+        let make = |label, format, usage| {
+            self.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width,
+                    height,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage,
+                view_formats: &[],
+            })
+        };
+        use wgpu::TextureUsages as U;
+        let color_usage = U::TEXTURE_BINDING | U::RENDER_ATTACHMENT | U::COPY_DST | U::COPY_SRC;
+        let targets = crate::renderer::gpu_scope(&self.device, || OwnedTargets {
+            width,
+            height,
+            scene: make(
+                "nimbus scene color",
+                wgpu::TextureFormat::Rgba16Float,
+                color_usage,
+            ),
+            depth: make(
+                "nimbus scene depth",
+                wgpu::TextureFormat::R32Float,
+                U::TEXTURE_BINDING | U::COPY_DST,
+            ),
+            output: make(
+                "nimbus output",
+                wgpu::TextureFormat::Rgba16Float,
+                color_usage,
+            ),
+            has_depth: false,
+        })?;
+        self.targets = Some(targets);
+        Ok(())
+    }
+
+    fn targets(&self) -> Result<&OwnedTargets> {
+        self.targets
+            .as_ref()
+            .ok_or_else(|| invalid_target("output", "no targets yet: call resize() first"))
+    }
+
+    /// Current target size.
+    pub fn size(&self) -> Option<(u32, u32)> {
+        self.targets.as_ref().map(|t| (t.width, t.height))
+    }
+
+    /// Uploads the scene color (linear RGBA, row-major from the top) and optionally its depth
+    /// (clip-space depth in the camera's convention). Lengths must be width × height.
+    pub fn upload_scene(&mut self, color: &[[f32; 4]], depth: Option<&[f32]>) -> Result<()> {
+        let t = self.targets()?;
+        let n = (t.width * t.height) as usize;
+        if color.len() != n {
+            return Err(invalid_target(
+                "scene_color",
+                format!(
+                    "has {} pixels, expected {}x{} = {n}",
+                    color.len(),
+                    t.width,
+                    t.height
+                ),
+            ));
+        }
+        if let Some(d) = depth {
+            if d.len() != n {
+                return Err(invalid_target(
+                    "scene_depth",
+                    format!("has {} pixels, expected {n}", d.len()),
+                ));
+            }
+            if let Some(bad) = d.iter().find(|v| !v.is_finite() || **v < 0.0 || **v > 1.0) {
+                return Err(invalid_target(
+                    "scene_depth",
+                    format!("depth values must be in [0, 1], found {bad}"),
+                ));
+            }
+        }
+        let extent = wgpu::Extent3d {
+            width: t.width,
+            height: t.height,
+            depth_or_array_layers: 1,
+        };
+        let write = |texture: &wgpu::Texture, bytes: &[u8], bpp: u32| {
+            self.queue.write_texture(
+                texture.as_image_copy(),
+                bytes,
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(t.width * bpp),
+                    rows_per_image: Some(t.height),
+                },
+                extent,
+            )
+        };
+        write(&t.scene, &to_f16(color), 8);
+        if let Some(d) = depth {
+            write(&t.depth, bytemuck::cast_slice(d), 4);
+        }
+        let has_depth = depth.is_some();
+        if let Some(t) = self.targets.as_mut() {
+            t.has_depth = has_depth;
+        }
+        self.take_errors()
+    }
+
+    /// Renders one frame and waits for it. Returns the wall time from submit to completion.
+    pub fn render(&mut self, frame: &FrameInputs) -> Result<Duration> {
+        self.renderer.prepare(frame)?;
+        let t = self.targets()?;
+        let scene_view = t.scene.create_view(&Default::default());
+        let output_view = t.output.create_view(&Default::default());
+        let depth_view = t
+            .has_depth
+            .then(|| t.depth.create_view(&Default::default()));
+        let color = if self.in_place {
+            ColorTargets::InPlace(&scene_view)
+        } else {
+            ColorTargets::Separate {
+                scene: &scene_view,
+                output: &output_view,
+            }
+        };
+        let mut encoder = self
+            .device
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("nimbus headless frame"),
+            });
+        self.renderer.encode(
+            &mut encoder,
+            &Targets {
+                color,
+                depth: depth_view.as_ref(),
+            },
+        )?;
+        let start = Instant::now();
+        let commands = crate::renderer::gpu_scope(&self.device, || encoder.finish())?;
+        self.queue.submit([commands]);
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Gpu(e.to_string()))?;
+        let elapsed = start.elapsed();
+        self.take_errors()?;
+        Ok(elapsed)
+    }
+
+    /// The composited image (linear HDR RGBA), row-major from the top. In place, this is the
+    /// scene texture the clouds were drawn onto.
+    pub fn read_output(&self) -> Result<Vec<[f32; 4]>> {
+        let t = self.targets()?;
+        let texture = if self.in_place { &t.scene } else { &t.output };
+        Ok(from_f16(&read_texture(
+            &self.device,
+            &self.queue,
+            texture,
+            0,
+        )?))
+    }
+
+    /// The last march result: rgb = in-scattered radiance L, a = transmittance T.
+    pub fn read_clouds(&self) -> Result<Vec<[f32; 4]>> {
+        let (march, _) = self
+            .renderer
+            .march_textures()
+            .ok_or_else(|| invalid_target("output", "nothing rendered yet"))?;
+        Ok(from_f16(&read_texture(
+            &self.device,
+            &self.queue,
+            march,
+            0,
+        )?))
+    }
+
+    /// The last frame's representative cloud depth in meters (0 where there is no cloud).
+    pub fn read_cloud_depth(&self) -> Result<Vec<f32>> {
+        let (_, depth) = self
+            .renderer
+            .march_textures()
+            .ok_or_else(|| invalid_target("output", "nothing rendered yet"))?;
+        let bytes = read_texture(&self.device, &self.queue, depth, 0)?;
+        Ok(bytemuck::pod_collect_to_vec(&bytes))
+    }
+
+    /// One mip level of a baked noise volume, RGBA8, x fastest then y then z.
+    pub fn read_noise(&self, which: NoiseVolume, mip: u32) -> Result<Vec<u8>> {
+        let texture = self.renderer.noise_volume(which);
+        if mip >= texture.mip_level_count() {
+            return Err(invalid_target(
+                "noise",
+                format!(
+                    "mip {mip} does not exist ({} levels)",
+                    texture.mip_level_count()
+                ),
+            ));
+        }
+        read_texture(&self.device, &self.queue, texture, mip)
+    }
+
+    /// The weather map, RGBA8 (R coverage, G cloud type, B density).
+    pub fn read_weather_map(&self) -> Result<Vec<u8>> {
+        read_texture(&self.device, &self.queue, self.renderer.weather_map(), 0)
+    }
+}

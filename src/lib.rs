@@ -1,0 +1,44 @@
+//! # Nimbus: volumetric clouds for any engine
+//!
+//! Nimbus ray-marches physically lit volumetric clouds over a curved planet and composites them
+//! onto the host's scene: `out = scene * T + L`.
+//!
+//! ## Conventions
+//!
+//! - Units: meters; angles in radians; sun illuminance in lux-like linear units; output is
+//!   linear HDR radiance in the same units as the sun's illuminance (× 1/sr).
+//! - World up is +Y by default ([`settings::Planet::up`]); right-handed; matrices are
+//!   column-major glam matrices. The planet's surface passes through the world origin.
+//! - Clip-space depth is in [0, 1]; reversed-Z and an infinite far plane are declared with
+//!   [`DepthConvention`] and checked against the projection, never guessed.
+//! - [`Sun::direction`] points from the scene toward the sun.
+//! - Every settings field has a documented default; `Settings::default()` is a good sky.
+//!
+//! ## Using it
+//!
+//! Hosts with a wgpu device use [`Renderer`]: `new` once, then per frame `prepare` with the
+//! [`FrameInputs`] and `encode` into the host's command encoder (nothing is submitted).
+//! Without a device, [`Headless`] creates one (software Vulkan is fine), owns its targets and
+//! reads the result back.
+
+pub mod atmosphere;
+pub mod demo;
+pub mod error;
+pub mod frame;
+mod gpu;
+pub mod headless;
+pub mod lighting;
+pub mod renderer;
+pub mod settings;
+pub mod weather;
+
+pub use error::{Error, Result};
+pub use frame::{Camera, DepthConvention, FrameInputs, Sun};
+pub use gpu::noise::NoiseVolume;
+pub use headless::Headless;
+pub use renderer::{ColorTargets, Renderer, Targets};
+pub use settings::{DebugDensity, Settings};
+pub use wgpu;
+
+/// Crate version, from Cargo.toml.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");

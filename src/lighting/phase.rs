@@ -1,0 +1,267 @@
+//! Phase functions, normalised over the sphere (∫ p dω = 1), in 1/sr.
+//!
+//! `cos_theta` is the cosine of the scattering angle: the angle between the direction light
+//! travels before and after the scattering event (1 = straight on, forward scattering).
+
+use std::f32::consts::PI;
+
+use crate::error::{invalid_setting, Result};
+
+/// Which phase function the clouds scatter with.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PhaseModel {
+    /// Jendersie & d'Eon 2023: HG + Draine blend fitted to Mie scattering of water droplets of
+    /// the given diameter (micrometres, valid fit range 5–50).
+    JendersieDEon {
+        /// Droplet diameter in µm. Default 10.
+        droplet_diameter_um: f32,
+    },
+    /// A blend of a forward and a backward Henyey-Greenstein lobe (the common game approach).
+    DualLobeHg {
+        /// Forward lobe asymmetry in (-1, 1). Typical 0.8.
+        g_forward: f32,
+        /// Backward lobe asymmetry in (-1, 1). Typical -0.3.
+        g_backward: f32,
+        /// Weight of the forward lobe in [0, 1]. Typical 0.7.
+        forward_weight: f32,
+    },
+}
+
+impl Default for PhaseModel {
+    fn default() -> Self {
+        PhaseModel::JendersieDEon {
+            droplet_diameter_um: 10.0,
+        }
+    }
+}
+
+/// The four parameters of the HG + Draine blend.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HgDraineParams {
+    /// HG asymmetry.
+    pub g_hg: f32,
+    /// Draine asymmetry.
+    pub g_d: f32,
+    /// Draine α.
+    pub alpha: f32,
+    /// Weight of the Draine lobe.
+    pub w_d: f32,
+}
+
+/// Jendersie & d'Eon 2023, "An Approximate Mie Scattering Function for Fog and Cloud
+/// Rendering", fits for droplet diameters 5 µm ≤ d ≤ 50 µm. At 10 µm these give
+/// g_hg 0.98818, g_d 0.55567, α 21.9955, w 0.48244 (the Ford thesis prints g_d 0.5567: a typo).
+pub fn jendersie_deon_params(d_um: f32) -> HgDraineParams {
+    let d = d_um as f64;
+    let g_hg = (-0.0990567 / (d - 1.67154)).exp();
+    let g_d = (-2.20679 / (d + 3.91029) - 0.428934).exp();
+    let alpha = (3.62489 - 8.29288 / (d + 5.52825)).exp();
+    let w_d = (-0.599085 / (d - 0.641583) - 0.664888).exp();
+    HgDraineParams {
+        g_hg: g_hg as f32,
+        g_d: g_d as f32,
+        alpha: alpha as f32,
+        w_d: w_d as f32,
+    }
+}
+
+/// Henyey-Greenstein: (1 - g²) / (4π (1 + g² - 2g cosθ)^1.5).
+pub fn henyey_greenstein(cos_theta: f32, g: f32) -> f32 {
+    let g2 = g * g;
+    let denom = (1.0 + g2 - 2.0 * g * cos_theta).max(1e-12);
+    (1.0 - g2) / (4.0 * PI * denom * denom.sqrt())
+}
+
+/// Draine 2003: HG times a generalised Rayleigh term, normalised:
+/// p_hg(θ, g) (1 + α cos²θ) / (1 + α (1 + 2g²) / 3).
+pub fn draine(cos_theta: f32, g: f32, alpha: f32) -> f32 {
+    henyey_greenstein(cos_theta, g) * (1.0 + alpha * cos_theta * cos_theta)
+        / (1.0 + alpha * (1.0 + 2.0 * g * g) / 3.0)
+}
+
+/// The HG + Draine blend: (1 - w) p_hg(g_hg) + w p_d(g_d, α).
+pub fn hg_draine(cos_theta: f32, p: &HgDraineParams) -> f32 {
+    (1.0 - p.w_d) * henyey_greenstein(cos_theta, p.g_hg) + p.w_d * draine(cos_theta, p.g_d, p.alpha)
+}
+
+impl PhaseModel {
+    /// Evaluates the phase function, with every asymmetry scaled by `eccentricity_scale`
+    /// (Wrenninge's c^i for octave i; 1 for single scattering).
+    pub fn eval(&self, cos_theta: f32, eccentricity_scale: f32) -> f32 {
+        let k = eccentricity_scale;
+        match *self {
+            PhaseModel::JendersieDEon {
+                droplet_diameter_um,
+            } => {
+                let mut p = jendersie_deon_params(droplet_diameter_um);
+                p.g_hg *= k;
+                p.g_d *= k;
+                hg_draine(cos_theta, &p)
+            }
+            PhaseModel::DualLobeHg {
+                g_forward,
+                g_backward,
+                forward_weight,
+            } => {
+                forward_weight * henyey_greenstein(cos_theta, g_forward * k)
+                    + (1.0 - forward_weight) * henyey_greenstein(cos_theta, g_backward * k)
+            }
+        }
+    }
+
+    /// Refuses parameters outside the model's domain.
+    pub fn validate(&self) -> Result<()> {
+        match *self {
+            PhaseModel::JendersieDEon {
+                droplet_diameter_um: d,
+            } => {
+                if !(d.is_finite() && (5.0..=50.0).contains(&d)) {
+                    return Err(invalid_setting(
+                        "lighting.phase.droplet_diameter_um",
+                        format!("the Jendersie & d'Eon fit holds for 5..=50 µm, got {d}"),
+                    ));
+                }
+            }
+            PhaseModel::DualLobeHg {
+                g_forward,
+                g_backward,
+                forward_weight,
+            } => {
+                for (field, g) in [
+                    ("lighting.phase.g_forward", g_forward),
+                    ("lighting.phase.g_backward", g_backward),
+                ] {
+                    if !(g.is_finite() && g.abs() < 0.999) {
+                        return Err(invalid_setting(
+                            field,
+                            format!("must be in (-0.999, 0.999), got {g}"),
+                        ));
+                    }
+                }
+                if !(forward_weight.is_finite() && (0.0..=1.0).contains(&forward_weight)) {
+                    return Err(invalid_setting(
+                        "lighting.phase.forward_weight",
+                        format!("must be in [0, 1], got {forward_weight}"),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The four numbers the shader needs: for JdE (g_hg, g_d, α, w); for dual-lobe
+    /// (g_forward, g_backward, 0, forward_weight). The model index goes separately.
+    pub(crate) fn gpu_params(&self) -> ([f32; 4], u32) {
+        match *self {
+            PhaseModel::JendersieDEon {
+                droplet_diameter_um,
+            } => {
+                let p = jendersie_deon_params(droplet_diameter_um);
+                ([p.g_hg, p.g_d, p.alpha, p.w_d], 0)
+            }
+            PhaseModel::DualLobeHg {
+                g_forward,
+                g_backward,
+                forward_weight,
+            } => ([g_forward, g_backward, 0.0, forward_weight], 1),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// ∫ p dω over the sphere, by the midpoint rule in cosθ (p depends on θ only), in f64 with
+    /// many intervals near cosθ = 1 where strongly forward lobes peak.
+    fn integrate(p: impl Fn(f32) -> f32) -> f64 {
+        // Substitute u = (1 - cosθ) on a geometric grid to resolve the forward peak.
+        let n = 200_000;
+        let mut sum = 0.0f64;
+        let umin = 1e-9f64;
+        let umax = 2.0f64;
+        let ratio = (umax / umin).ln();
+        for i in 0..n {
+            let a = umin * ((i as f64 / n as f64) * ratio).exp();
+            let b = umin * (((i + 1) as f64 / n as f64) * ratio).exp();
+            let mid = 0.5 * (a + b);
+            sum += p((1.0 - mid) as f32) as f64 * (b - a);
+        }
+        // [0, umin] adds at most p(1) * umin.
+        sum += p(1.0) as f64 * umin;
+        2.0 * std::f64::consts::PI * sum
+    }
+
+    #[test]
+    fn jendersie_deon_fits_at_10_um() {
+        let p = jendersie_deon_params(10.0);
+        assert!((p.g_hg - 0.98818).abs() < 5e-6, "g_hg {}", p.g_hg);
+        assert!((p.g_d - 0.55567).abs() < 5e-6, "g_d {}", p.g_d);
+        assert!((p.alpha - 21.9955).abs() < 5e-4, "alpha {}", p.alpha);
+        assert!((p.w_d - 0.48244).abs() < 5e-6, "w {}", p.w_d);
+    }
+
+    #[test]
+    fn phase_functions_integrate_to_one() {
+        for g in [-0.7f32, 0.0, 0.3, 0.8, 0.95] {
+            let i = integrate(|c| henyey_greenstein(c, g));
+            assert!((i - 1.0).abs() < 2e-3, "HG g={g}: {i}");
+        }
+        for (g, a) in [(0.0f32, 1.0f32), (0.5, 21.9955), (0.8, 5.0)] {
+            let i = integrate(|c| draine(c, g, a));
+            assert!((i - 1.0).abs() < 2e-3, "Draine g={g} a={a}: {i}");
+        }
+        for d in [5.0f32, 10.0, 20.0, 50.0] {
+            let m = PhaseModel::JendersieDEon {
+                droplet_diameter_um: d,
+            };
+            for k in [1.0f32, 0.5, 0.25] {
+                let i = integrate(|c| m.eval(c, k));
+                assert!((i - 1.0).abs() < 3e-3, "JdE d={d} k={k}: {i}");
+            }
+        }
+        let dual = PhaseModel::DualLobeHg {
+            g_forward: 0.8,
+            g_backward: -0.3,
+            forward_weight: 0.7,
+        };
+        let i = integrate(|c| dual.eval(c, 1.0));
+        assert!((i - 1.0).abs() < 2e-3, "dual lobe: {i}");
+    }
+
+    #[test]
+    fn isotropic_hg_is_one_over_four_pi() {
+        for c in [-1.0f32, 0.0, 0.5, 1.0] {
+            assert!((henyey_greenstein(c, 0.0) - 1.0 / (4.0 * PI)).abs() < 1e-7);
+        }
+    }
+
+    #[test]
+    fn cloud_phase_is_strongly_forward() {
+        let m = PhaseModel::default();
+        assert!(m.eval(1.0, 1.0) > 100.0 * m.eval(0.0, 1.0));
+        // Lower eccentricity flattens the lobe.
+        assert!(m.eval(1.0, 0.5) < m.eval(1.0, 1.0));
+    }
+
+    #[test]
+    fn out_of_domain_parameters_are_refused() {
+        assert!(PhaseModel::JendersieDEon {
+            droplet_diameter_um: 2.0
+        }
+        .validate()
+        .is_err());
+        assert!(PhaseModel::JendersieDEon {
+            droplet_diameter_um: f32::NAN
+        }
+        .validate()
+        .is_err());
+        assert!(PhaseModel::DualLobeHg {
+            g_forward: 1.0,
+            g_backward: 0.0,
+            forward_weight: 0.5
+        }
+        .validate()
+        .is_err());
+    }
+}

@@ -1,0 +1,407 @@
+//! [`Renderer`]: the one entry point for Rust hosts that own a wgpu device.
+//!
+//! `new` bakes the noise and builds the march pipelines; `prepare` validates and stores the
+//! frame inputs; `encode` validates the targets and records the march and composite passes into
+//! the host's encoder, submitting nothing (the glyphon / vello shape).
+
+use wgpu::TextureFormat as F;
+
+use crate::error::{invalid_target, Error, Result};
+use crate::frame::FrameInputs;
+use crate::gpu::composite::CompositeCache;
+use crate::gpu::march::{MarchPipeline, MarchUniforms};
+use crate::gpu::noise::{NoiseTextures, NoiseVolume};
+use crate::gpu::shaders::DepthKind;
+use crate::settings::Settings;
+
+/// Output formats the composite can render to (blendable ones also work in place).
+pub const OUTPUT_FORMATS: &[wgpu::TextureFormat] = &[
+    F::Rgba8Unorm,
+    F::Rgba8UnormSrgb,
+    F::Bgra8Unorm,
+    F::Bgra8UnormSrgb,
+    F::Rgb10a2Unorm,
+    F::Rgba16Float,
+    F::Rgba32Float,
+];
+const OUTPUT_NAMES: &str =
+    "Rgba8Unorm(Srgb), Bgra8Unorm(Srgb), Rgb10a2Unorm, Rgba16Float, Rgba32Float (not in place)";
+
+/// Scene-depth formats: depth formats, or `R32Float` holding clip-space depth.
+pub const DEPTH_FORMATS: &[wgpu::TextureFormat] = &[
+    F::Depth32Float,
+    F::Depth24Plus,
+    F::Depth24PlusStencil8,
+    F::Depth16Unorm,
+    F::Depth32FloatStencil8,
+    F::R32Float,
+];
+const DEPTH_NAMES: &str =
+    "Depth32Float, Depth24Plus, Depth24PlusStencil8 (depth-only view), Depth16Unorm, Depth32FloatStencil8, R32Float";
+
+/// Where the scene color comes from and where the result goes.
+#[derive(Clone, Copy, Debug)]
+pub enum ColorTargets<'a> {
+    /// Composite onto the scene color itself: it needs `RENDER_ATTACHMENT` usage and a
+    /// blendable format.
+    InPlace(&'a wgpu::TextureView),
+    /// Read the scene color (`TEXTURE_BINDING`) and write `out = scene * T + L` to a separate
+    /// output (`RENDER_ATTACHMENT`) of the same size.
+    Separate {
+        /// The host's rendered scene.
+        scene: &'a wgpu::TextureView,
+        /// Where the composited image goes.
+        output: &'a wgpu::TextureView,
+    },
+}
+
+/// The textures of one frame. Views must cover mip 0 of a 2D texture; all must have one size.
+#[derive(Clone, Copy, Debug)]
+pub struct Targets<'a> {
+    /// Scene color and output.
+    pub color: ColorTargets<'a>,
+    /// Scene depth (`TEXTURE_BINDING`), in the camera's [`crate::DepthConvention`]. `None`
+    /// means nothing occludes the clouds.
+    pub depth: Option<&'a wgpu::TextureView>,
+}
+
+struct SizedTextures {
+    size: (u32, u32),
+    march_view: wgpu::TextureView,
+    cloud_depth_view: wgpu::TextureView,
+    /// Kept so the readback helpers can copy them.
+    march: wgpu::Texture,
+    cloud_depth: wgpu::Texture,
+}
+
+/// Renders volumetric clouds with the host's wgpu device.
+pub struct Renderer {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    settings: Settings,
+    noise: NoiseTextures,
+    march_depth: MarchPipeline,
+    march_r32: MarchPipeline,
+    composite: CompositeCache,
+    uniforms: wgpu::Buffer,
+    no_depth: wgpu::TextureView,
+    sized: Option<SizedTextures>,
+    pending: Option<MarchUniforms>,
+    frame_index: u32,
+}
+
+/// Runs `f` inside a validation error scope and turns a captured wgpu error into `Error::Gpu`.
+pub(crate) fn gpu_scope<T>(device: &wgpu::Device, f: impl FnOnce() -> T) -> Result<T> {
+    let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+    let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let value = f();
+    let v = pollster::block_on(validation.pop());
+    let o = pollster::block_on(oom.pop());
+    match v.or(o) {
+        Some(e) => Err(Error::Gpu(e.to_string())),
+        None => Ok(value),
+    }
+}
+
+fn check_2d(target: &'static str, view: &wgpu::TextureView) -> Result<(u32, u32)> {
+    let t = view.texture();
+    if t.dimension() != wgpu::TextureDimension::D2 || t.depth_or_array_layers() != 1 {
+        return Err(invalid_target(target, "must be a single-layer 2D texture"));
+    }
+    if t.sample_count() != 1 {
+        return Err(invalid_target(
+            target,
+            "must not be multisampled (resolve it first)",
+        ));
+    }
+    Ok((t.width(), t.height()))
+}
+
+fn check_usage(
+    target: &'static str,
+    view: &wgpu::TextureView,
+    usage: wgpu::TextureUsages,
+) -> Result<()> {
+    if view.texture().usage().contains(usage) {
+        Ok(())
+    } else {
+        Err(invalid_target(target, format!("needs {usage:?} usage")))
+    }
+}
+
+fn check_format(
+    target: &'static str,
+    view: &wgpu::TextureView,
+    allowed: &[wgpu::TextureFormat],
+    names: &'static str,
+) -> Result<wgpu::TextureFormat> {
+    let format = view.texture().format();
+    if allowed.contains(&format) {
+        Ok(format)
+    } else {
+        Err(Error::UnsupportedFormat {
+            target,
+            format,
+            supported: names,
+        })
+    }
+}
+
+fn check_size(target: &'static str, got: (u32, u32), want: (u32, u32)) -> Result<()> {
+    if got == want {
+        Ok(())
+    } else {
+        Err(invalid_target(
+            target,
+            format!(
+                "is {}x{} but the output is {}x{}",
+                got.0, got.1, want.0, want.1
+            ),
+        ))
+    }
+}
+
+/// Validated targets: output size, formats and which march variant to use.
+struct CheckedTargets {
+    size: (u32, u32),
+    output_format: wgpu::TextureFormat,
+    depth_kind: DepthKind,
+}
+
+fn check_targets(t: &Targets) -> Result<CheckedTargets> {
+    let use_render = wgpu::TextureUsages::RENDER_ATTACHMENT;
+    let use_sample = wgpu::TextureUsages::TEXTURE_BINDING;
+    let (size, output_format) = match t.color {
+        ColorTargets::InPlace(view) => {
+            let size = check_2d("output", view)?;
+            let format = check_format("output", view, OUTPUT_FORMATS, OUTPUT_NAMES)?;
+            if format == F::Rgba32Float {
+                return Err(Error::UnsupportedFormat {
+                    target: "output",
+                    format,
+                    supported: "a blendable format for in-place compositing (Rgba32Float is not blendable; use ColorTargets::Separate)",
+                });
+            }
+            check_usage("output", view, use_render)?;
+            (size, format)
+        }
+        ColorTargets::Separate { scene, output } => {
+            let size = check_2d("output", output)?;
+            let format = check_format("output", output, OUTPUT_FORMATS, OUTPUT_NAMES)?;
+            check_usage("output", output, use_render)?;
+            check_size("scene_color", check_2d("scene_color", scene)?, size)?;
+            check_format("scene_color", scene, OUTPUT_FORMATS, OUTPUT_NAMES)?;
+            check_usage("scene_color", scene, use_sample)?;
+            if scene.texture() == output.texture() {
+                return Err(invalid_target(
+                    "output",
+                    "is the scene color texture: use ColorTargets::InPlace",
+                ));
+            }
+            (size, format)
+        }
+    };
+    if size.0 == 0 || size.1 == 0 {
+        return Err(invalid_target("output", "has a zero size"));
+    }
+    let depth_kind = match t.depth {
+        None => DepthKind::Depth,
+        Some(view) => {
+            check_size("scene_depth", check_2d("scene_depth", view)?, size)?;
+            let format = check_format("scene_depth", view, DEPTH_FORMATS, DEPTH_NAMES)?;
+            check_usage("scene_depth", view, use_sample)?;
+            if format == F::R32Float {
+                DepthKind::R32Float
+            } else {
+                DepthKind::Depth
+            }
+        }
+    };
+    Ok(CheckedTargets {
+        size,
+        output_format,
+        depth_kind,
+    })
+}
+
+impl Renderer {
+    /// Validates `settings`, bakes the noise volumes and weather map (submitting that work
+    /// on `queue`) and builds the march pipelines.
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, settings: Settings) -> Result<Self> {
+        settings.validate()?;
+        gpu_scope(device, || {
+            let noise = NoiseTextures::new(device, queue, &settings.noise, &settings.weather_map);
+            let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("nimbus march uniforms"),
+                size: std::mem::size_of::<MarchUniforms>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            let no_depth = device
+                .create_texture(&wgpu::TextureDescriptor {
+                    label: Some("nimbus no scene depth"),
+                    size: wgpu::Extent3d {
+                        width: 1,
+                        height: 1,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format: F::Depth32Float,
+                    usage: wgpu::TextureUsages::TEXTURE_BINDING,
+                    view_formats: &[],
+                })
+                .create_view(&Default::default());
+            Self {
+                device: device.clone(),
+                queue: queue.clone(),
+                march_depth: MarchPipeline::new(device, DepthKind::Depth),
+                march_r32: MarchPipeline::new(device, DepthKind::R32Float),
+                composite: CompositeCache::default(),
+                settings,
+                noise,
+                uniforms,
+                no_depth,
+                sized: None,
+                pending: None,
+                frame_index: 0,
+            }
+        })
+    }
+
+    /// The settings in use.
+    pub fn settings(&self) -> &Settings {
+        &self.settings
+    }
+
+    /// Replaces the settings; re-bakes the noise only when its seed, sizes or the weather
+    /// map changed. On error nothing changes.
+    pub fn set_settings(&mut self, settings: Settings) -> Result<()> {
+        settings.validate()?;
+        if settings.noise != self.settings.noise
+            || settings.weather_map != self.settings.weather_map
+        {
+            let (device, queue) = (&self.device, &self.queue);
+            self.noise = gpu_scope(device, || {
+                NoiseTextures::new(device, queue, &settings.noise, &settings.weather_map)
+            })?;
+        }
+        self.settings = settings;
+        Ok(())
+    }
+
+    /// Validates the frame inputs and computes this frame's uniforms. On error the previous
+    /// frame's state is dropped, so `encode` refuses to draw stale inputs.
+    pub fn prepare(&mut self, frame: &FrameInputs) -> Result<()> {
+        self.pending = None;
+        let (camera, sun_dir) = frame.validate()?;
+        self.pending = Some(MarchUniforms::new(
+            &self.settings,
+            frame,
+            &camera,
+            sun_dir,
+            self.frame_index,
+            false,
+        ));
+        Ok(())
+    }
+
+    /// Records the march and composite passes into `encoder`. Submits nothing: the host
+    /// submits the encoder. One `encode` per `prepare`.
+    pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder, targets: &Targets) -> Result<()> {
+        let mut uniforms = self.pending.ok_or(Error::NotPrepared)?;
+        let checked = check_targets(targets)?;
+        uniforms.set_has_depth(targets.depth.is_some());
+        let device = self.device.clone();
+        gpu_scope(&device, || {
+            self.ensure_size(checked.size);
+            self.queue
+                .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
+            let sized = self
+                .sized
+                .as_ref()
+                .expect("sized textures exist after ensure_size");
+            let march = match checked.depth_kind {
+                DepthKind::Depth => &self.march_depth,
+                DepthKind::R32Float => &self.march_r32,
+            };
+            march.record(
+                &device,
+                encoder,
+                &self.uniforms,
+                &self.noise,
+                targets.depth.unwrap_or(&self.no_depth),
+                &sized.march_view,
+                &sized.cloud_depth_view,
+                checked.size,
+            );
+            let (scene, output) = match targets.color {
+                ColorTargets::InPlace(v) => (None, v),
+                ColorTargets::Separate { scene, output } => (Some(scene), output),
+            };
+            self.composite.record(
+                &device,
+                encoder,
+                &sized.march_view,
+                scene,
+                output,
+                checked.output_format,
+            );
+        })?;
+        self.frame_index = self.frame_index.wrapping_add(1);
+        Ok(())
+    }
+
+    /// (Re)creates the internal per-size textures: only when the target size changes.
+    fn ensure_size(&mut self, size: (u32, u32)) {
+        if self.sized.as_ref().is_some_and(|s| s.size == size) {
+            return;
+        }
+        let make = |label, format| {
+            self.device.create_texture(&wgpu::TextureDescriptor {
+                label: Some(label),
+                size: wgpu::Extent3d {
+                    width: size.0,
+                    height: size.1,
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format,
+                usage: wgpu::TextureUsages::STORAGE_BINDING
+                    | wgpu::TextureUsages::TEXTURE_BINDING
+                    | wgpu::TextureUsages::COPY_SRC,
+                view_formats: &[],
+            })
+        };
+        let march = make("nimbus clouds (L, T)", F::Rgba16Float);
+        let cloud_depth = make("nimbus cloud depth", F::R32Float);
+        self.sized = Some(SizedTextures {
+            size,
+            march_view: march.create_view(&Default::default()),
+            cloud_depth_view: cloud_depth.create_view(&Default::default()),
+            march,
+            cloud_depth,
+        });
+    }
+
+    /// Number of composite pipelines built so far (one per output format and mode).
+    pub fn cached_pipeline_count(&self) -> usize {
+        self.composite.len()
+    }
+
+    pub(crate) fn noise_volume(&self, which: NoiseVolume) -> &wgpu::Texture {
+        self.noise.volume(which)
+    }
+
+    pub(crate) fn weather_map(&self) -> &wgpu::Texture {
+        &self.noise.weather
+    }
+
+    /// The march result of the last frame: RGBA16F with rgb = L, a = T; and the cloud depth.
+    pub(crate) fn march_textures(&self) -> Option<(&wgpu::Texture, &wgpu::Texture)> {
+        self.sized.as_ref().map(|s| (&s.march, &s.cloud_depth))
+    }
+}

@@ -1,0 +1,600 @@
+//! Quality and look settings: plain data, `Default` gives a good-looking fair-weather sky.
+//!
+//! Units: meters, radians, linear RGB. Every field documents its default.
+//! [`Settings::validate`] refuses anything non-finite or out of range with the field's path.
+
+use glam::{Vec2, Vec3};
+
+use crate::error::{invalid_setting, Result};
+use crate::lighting::phase::PhaseModel;
+
+/// Everything that defines how the clouds look and how they are rendered.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    /// Planet geometry and world orientation.
+    pub planet: Planet,
+    /// Altitudes of the cloud shell.
+    pub layer: CloudLayer,
+    /// Density model (Schneider, as described in the Aetherius thesis).
+    pub clouds: CloudShape,
+    /// The 2D weather map generator.
+    pub weather_map: WeatherMap,
+    /// Sizes and seed of the baked noise volumes.
+    pub noise: NoiseSettings,
+    /// Phase function, multiple scattering, ambient light.
+    pub lighting: Lighting,
+    /// Ray-march budget.
+    pub march: March,
+    /// Aerial-perspective haze that distant clouds fade into.
+    pub haze: Haze,
+    /// Wind moving the weather map and the noise.
+    pub wind: Wind,
+    /// Replaces the noise model by an analytic medium (for checking the integrator).
+    pub debug_density: DebugDensity,
+}
+
+/// The planet: a sphere whose surface passes through the world origin.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Planet {
+    /// Planet radius in meters. Default 6 360 000 (Earth).
+    pub radius: f32,
+    /// World up direction (normalised on use). Default +Y. The planet center lies at
+    /// `-up * radius`, so the world origin is on the ground at altitude 0.
+    pub up: Vec3,
+}
+
+/// The cloud shell: two spheres concentric with the planet.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CloudLayer {
+    /// Altitude of the cloud bases in meters. Default 1 500.
+    pub bottom_altitude: f32,
+    /// Altitude of the highest cloud tops in meters. Default 4 500.
+    pub top_altitude: f32,
+}
+
+/// The density model's knobs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CloudShape {
+    /// Global coverage in [0, 1], multiplied with the weather map's coverage. 0 = clear sky.
+    /// Default 0.55.
+    pub coverage: f32,
+    /// Global density multiplier, >= 0. Default 1.
+    pub density: f32,
+    /// Extinction coefficient σt (1/m) of density 1. Default 0.04 (cumulus: 0.02–0.1).
+    pub extinction: f32,
+    /// Single-scattering albedo σs/σt in [0, 1]. Default 0.99 (water droplets barely absorb).
+    pub albedo: f32,
+    /// Size in meters of one tile of the base-shape volume. Default 14 000.
+    pub base_scale: f32,
+    /// Size in meters of one tile of the detail volume. Default 1 800.
+    pub detail_scale: f32,
+    /// How deeply detail noise erodes the base shape, in [0, 1]. Default 0.35
+    /// (the Aetherius default before coverage attenuation).
+    pub detail_strength: f32,
+    /// Fraction of the layer thickness over which density fades in at the bottom and out at
+    /// the top of the whole shell, in [0, 0.5]. Default 0.1.
+    pub layer_softness: f32,
+}
+
+/// Parameters of the procedural 2D weather map (R coverage, G cloud type, B density).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WeatherMap {
+    /// Seed of the weather map noise. Default 7.
+    pub seed: u32,
+    /// Size in meters of one (tileable) weather-map tile. Default 60 000.
+    pub extent: f32,
+    /// Number of cloud cells across one tile (base frequency of the noise), >= 1. Default 10.
+    pub frequency: u32,
+    /// Mean cloud type in [0, 1]: 0 stratus, 1/3 stratocumulus, 2/3 cumulus, 1 cumulonimbus.
+    /// Default 0.62.
+    pub cloud_type: f32,
+    /// How much the cloud type varies across the map, in [0, 1]. Default 0.25.
+    pub type_variation: f32,
+    /// How much the local density varies across the map, in [0, 1]. Default 0.3.
+    pub density_variation: f32,
+}
+
+/// Sizes and seed of the baked noise.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NoiseSettings {
+    /// Seed of the base and detail volumes and of the blue noise. Default 1.
+    pub seed: u32,
+    /// Edge of the base-shape volume (RGBA8), a power of two in [8, 256]. Default 128.
+    pub base_size: u32,
+    /// Edge of the detail volume (RGBA8), a power of two in [8, 128]. Default 32.
+    pub detail_size: u32,
+    /// Edge of the weather map, a power of two in [16, 2048]. Default 512.
+    pub weather_size: u32,
+    /// Edge of the blue-noise jitter texture, a power of two in [8, 128]. Default 64.
+    pub blue_noise_size: u32,
+}
+
+/// Wrenninge 2015 multiple-scattering octaves: octave i scatters `b^i` as much light, through
+/// an optical depth scaled by `a^i`, with phase eccentricity scaled by `c^i`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MultipleScattering {
+    /// Number of octaves N in [1, 8]; 1 = single scattering only. Default 4.
+    pub octaves: u32,
+    /// Attenuation a in (0, 1]. Default 0.5.
+    pub attenuation: f32,
+    /// Contribution b in [0, 1]. Default 0.5.
+    pub contribution: f32,
+    /// Eccentricity c in [0, 1]. Default 0.5.
+    pub eccentricity: f32,
+}
+
+/// Lighting model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Lighting {
+    /// Phase function. Default Jendersie & d'Eon HG + Draine for 10 µm droplets.
+    pub phase: PhaseModel,
+    /// Multiple-scattering approximation.
+    pub multiple_scattering: MultipleScattering,
+    /// Ambient radiance (linear RGB, same units as sun illuminance × 1/sr) at the top of the
+    /// layer. Default a bright blue-white sky.
+    pub ambient_top: Vec3,
+    /// Ambient radiance at the bottom of the layer. Default a dimmer grey-blue.
+    pub ambient_bottom: Vec3,
+    /// Number of light-march samples toward the sun, in [1, 32]. Default 6.
+    pub light_steps: u32,
+    /// Length in meters the light march covers (clipped to the shell). Default 3 000.
+    pub light_distance: f32,
+}
+
+/// Ray-march budget.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct March {
+    /// Steps for the longest segment, in [4, 1024]. Default 96.
+    pub max_steps: u32,
+    /// Steps for the shortest segment, in [1, max_steps]. Default 48.
+    pub min_steps: u32,
+    /// Rays end this far from the camera, in meters (> 0). Default 120 000.
+    pub max_distance: f32,
+    /// The march stops once transmittance falls below this, in [0, 1). Default 0.01.
+    pub transmittance_cutoff: f32,
+    /// Blue-noise jitter of the ray start (against banding). Default true.
+    pub jitter: bool,
+}
+
+/// Distant clouds fade into a haze color (aerial perspective).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Haze {
+    /// Radiance of the haze (linear RGB). Default a pale sky blue.
+    pub color: Vec3,
+    /// Distance in meters at which the fade starts (>= 0). Default 15 000.
+    pub start_distance: f32,
+    /// e-folding distance of the fade beyond the start, meters; `f32::INFINITY` disables
+    /// the haze. Default 40 000.
+    pub fade_distance: f32,
+}
+
+/// Wind, in world units.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Wind {
+    /// Horizontal direction (x, z in world space with +Y up; normalised on use). Default (1, 0).
+    pub direction: Vec2,
+    /// Speed in m/s (>= 0). Default 10.
+    pub speed: f32,
+}
+
+/// Analytic media replacing the noise model, so the integrator can be checked against
+/// closed-form or path-traced references. Densities multiply `clouds.extinction`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DebugDensity {
+    /// Normal rendering with the procedural noise model.
+    Off,
+    /// A homogeneous spherical slab between two altitudes.
+    Slab {
+        /// Bottom altitude in meters.
+        bottom_altitude: f32,
+        /// Top altitude in meters.
+        top_altitude: f32,
+        /// Density (σt = density × extinction).
+        density: f32,
+    },
+    /// A homogeneous sphere.
+    Sphere {
+        /// World-space center in meters.
+        center: Vec3,
+        /// Radius in meters.
+        radius: f32,
+        /// Density (σt = density × extinction).
+        density: f32,
+    },
+}
+
+impl Default for Planet {
+    fn default() -> Self {
+        Self {
+            radius: 6_360_000.0,
+            up: Vec3::Y,
+        }
+    }
+}
+
+impl Default for CloudLayer {
+    fn default() -> Self {
+        Self {
+            bottom_altitude: 1_500.0,
+            top_altitude: 4_500.0,
+        }
+    }
+}
+
+impl Default for CloudShape {
+    fn default() -> Self {
+        Self {
+            coverage: 0.55,
+            density: 1.0,
+            extinction: 0.04,
+            albedo: 0.99,
+            base_scale: 14_000.0,
+            detail_scale: 1_800.0,
+            detail_strength: 0.35,
+            layer_softness: 0.1,
+        }
+    }
+}
+
+impl Default for WeatherMap {
+    fn default() -> Self {
+        Self {
+            seed: 7,
+            extent: 60_000.0,
+            frequency: 10,
+            cloud_type: 0.62,
+            type_variation: 0.25,
+            density_variation: 0.3,
+        }
+    }
+}
+
+impl Default for NoiseSettings {
+    fn default() -> Self {
+        Self {
+            seed: 1,
+            base_size: 128,
+            detail_size: 32,
+            weather_size: 512,
+            blue_noise_size: 64,
+        }
+    }
+}
+
+impl Default for MultipleScattering {
+    fn default() -> Self {
+        Self {
+            octaves: 4,
+            attenuation: 0.5,
+            contribution: 0.5,
+            eccentricity: 0.5,
+        }
+    }
+}
+
+impl Default for Lighting {
+    fn default() -> Self {
+        Self {
+            phase: PhaseModel::default(),
+            multiple_scattering: MultipleScattering::default(),
+            ambient_top: Vec3::new(0.55, 0.65, 0.85) * 0.35,
+            ambient_bottom: Vec3::new(0.45, 0.5, 0.6) * 0.12,
+            light_steps: 6,
+            light_distance: 3_000.0,
+        }
+    }
+}
+
+impl Default for March {
+    fn default() -> Self {
+        Self {
+            max_steps: 96,
+            min_steps: 48,
+            max_distance: 120_000.0,
+            transmittance_cutoff: 0.01,
+            jitter: true,
+        }
+    }
+}
+
+impl Default for Haze {
+    fn default() -> Self {
+        Self {
+            color: Vec3::new(0.62, 0.72, 0.88) * 0.5,
+            start_distance: 15_000.0,
+            fade_distance: 40_000.0,
+        }
+    }
+}
+
+impl Default for Wind {
+    fn default() -> Self {
+        Self {
+            direction: Vec2::X,
+            speed: 10.0,
+        }
+    }
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Self {
+            planet: Planet::default(),
+            layer: CloudLayer::default(),
+            clouds: CloudShape::default(),
+            weather_map: WeatherMap::default(),
+            noise: NoiseSettings::default(),
+            lighting: Lighting::default(),
+            march: March::default(),
+            haze: Haze::default(),
+            wind: Wind::default(),
+            debug_density: DebugDensity::Off,
+        }
+    }
+}
+
+fn finite(field: &'static str, v: f32) -> Result<()> {
+    if v.is_finite() {
+        Ok(())
+    } else {
+        Err(invalid_setting(field, format!("must be finite, got {v}")))
+    }
+}
+
+fn in_range(field: &'static str, v: f32, lo: f32, hi: f32) -> Result<()> {
+    finite(field, v)?;
+    if (lo..=hi).contains(&v) {
+        Ok(())
+    } else {
+        Err(invalid_setting(
+            field,
+            format!("must be in [{lo}, {hi}], got {v}"),
+        ))
+    }
+}
+
+fn positive(field: &'static str, v: f32) -> Result<()> {
+    finite(field, v)?;
+    if v > 0.0 {
+        Ok(())
+    } else {
+        Err(invalid_setting(field, format!("must be > 0, got {v}")))
+    }
+}
+
+fn non_negative(field: &'static str, v: f32) -> Result<()> {
+    finite(field, v)?;
+    if v >= 0.0 {
+        Ok(())
+    } else {
+        Err(invalid_setting(field, format!("must be >= 0, got {v}")))
+    }
+}
+
+fn color(field: &'static str, c: Vec3) -> Result<()> {
+    if c.is_finite() && c.min_element() >= 0.0 {
+        Ok(())
+    } else {
+        Err(invalid_setting(
+            field,
+            format!("must be finite and non-negative, got {c}"),
+        ))
+    }
+}
+
+fn pow2(field: &'static str, v: u32, lo: u32, hi: u32) -> Result<()> {
+    if v.is_power_of_two() && (lo..=hi).contains(&v) {
+        Ok(())
+    } else {
+        Err(invalid_setting(
+            field,
+            format!("must be a power of two in [{lo}, {hi}], got {v}"),
+        ))
+    }
+}
+
+fn count(field: &'static str, v: u32, lo: u32, hi: u32) -> Result<()> {
+    if (lo..=hi).contains(&v) {
+        Ok(())
+    } else {
+        Err(invalid_setting(
+            field,
+            format!("must be in [{lo}, {hi}], got {v}"),
+        ))
+    }
+}
+
+impl Settings {
+    /// Checks every field; the error names the first offending one.
+    pub fn validate(&self) -> Result<()> {
+        positive("planet.radius", self.planet.radius)?;
+        if !self.planet.up.is_finite() || self.planet.up.length() < 1e-6 {
+            return Err(invalid_setting(
+                "planet.up",
+                format!("must be a finite non-zero vector, got {}", self.planet.up),
+            ));
+        }
+        let layer = &self.layer;
+        non_negative("layer.bottom_altitude", layer.bottom_altitude)?;
+        positive("layer.top_altitude", layer.top_altitude)?;
+        if layer.bottom_altitude >= layer.top_altitude {
+            return Err(invalid_setting(
+                "layer.bottom_altitude",
+                format!(
+                    "must be below layer.top_altitude ({} >= {})",
+                    layer.bottom_altitude, layer.top_altitude
+                ),
+            ));
+        }
+        let c = &self.clouds;
+        in_range("clouds.coverage", c.coverage, 0.0, 1.0)?;
+        non_negative("clouds.density", c.density)?;
+        positive("clouds.extinction", c.extinction)?;
+        in_range("clouds.albedo", c.albedo, 0.0, 1.0)?;
+        positive("clouds.base_scale", c.base_scale)?;
+        positive("clouds.detail_scale", c.detail_scale)?;
+        in_range("clouds.detail_strength", c.detail_strength, 0.0, 1.0)?;
+        in_range("clouds.layer_softness", c.layer_softness, 0.0, 0.5)?;
+        let w = &self.weather_map;
+        positive("weather_map.extent", w.extent)?;
+        count("weather_map.frequency", w.frequency, 1, 64)?;
+        in_range("weather_map.cloud_type", w.cloud_type, 0.0, 1.0)?;
+        in_range("weather_map.type_variation", w.type_variation, 0.0, 1.0)?;
+        in_range(
+            "weather_map.density_variation",
+            w.density_variation,
+            0.0,
+            1.0,
+        )?;
+        let n = &self.noise;
+        pow2("noise.base_size", n.base_size, 8, 256)?;
+        pow2("noise.detail_size", n.detail_size, 8, 128)?;
+        pow2("noise.weather_size", n.weather_size, 16, 2048)?;
+        pow2("noise.blue_noise_size", n.blue_noise_size, 8, 128)?;
+        let l = &self.lighting;
+        l.phase.validate()?;
+        let ms = &l.multiple_scattering;
+        count("lighting.multiple_scattering.octaves", ms.octaves, 1, 8)?;
+        in_range(
+            "lighting.multiple_scattering.attenuation",
+            ms.attenuation,
+            1e-3,
+            1.0,
+        )?;
+        in_range(
+            "lighting.multiple_scattering.contribution",
+            ms.contribution,
+            0.0,
+            1.0,
+        )?;
+        in_range(
+            "lighting.multiple_scattering.eccentricity",
+            ms.eccentricity,
+            0.0,
+            1.0,
+        )?;
+        color("lighting.ambient_top", l.ambient_top)?;
+        color("lighting.ambient_bottom", l.ambient_bottom)?;
+        count("lighting.light_steps", l.light_steps, 1, 32)?;
+        positive("lighting.light_distance", l.light_distance)?;
+        let m = &self.march;
+        count("march.max_steps", m.max_steps, 4, 1024)?;
+        count("march.min_steps", m.min_steps, 1, m.max_steps)?;
+        positive("march.max_distance", m.max_distance)?;
+        in_range(
+            "march.transmittance_cutoff",
+            m.transmittance_cutoff,
+            0.0,
+            0.999,
+        )?;
+        let h = &self.haze;
+        color("haze.color", h.color)?;
+        non_negative("haze.start_distance", h.start_distance)?;
+        if h.fade_distance.is_nan() || h.fade_distance <= 0.0 {
+            return Err(invalid_setting(
+                "haze.fade_distance",
+                format!("must be > 0 (or infinity), got {}", h.fade_distance),
+            ));
+        }
+        if !self.wind.direction.is_finite() {
+            return Err(invalid_setting(
+                "wind.direction",
+                format!("must be finite, got {}", self.wind.direction),
+            ));
+        }
+        non_negative("wind.speed", self.wind.speed)?;
+        match self.debug_density {
+            DebugDensity::Off => {}
+            DebugDensity::Slab {
+                bottom_altitude,
+                top_altitude,
+                density,
+            } => {
+                finite("debug_density.bottom_altitude", bottom_altitude)?;
+                finite("debug_density.top_altitude", top_altitude)?;
+                if bottom_altitude >= top_altitude {
+                    return Err(invalid_setting(
+                        "debug_density.bottom_altitude",
+                        "must be below debug_density.top_altitude",
+                    ));
+                }
+                non_negative("debug_density.density", density)?;
+            }
+            DebugDensity::Sphere {
+                center,
+                radius,
+                density,
+            } => {
+                if !center.is_finite() {
+                    return Err(invalid_setting("debug_density.center", "must be finite"));
+                }
+                positive("debug_density.radius", radius)?;
+                non_negative("debug_density.density", density)?;
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Error;
+
+    fn refused(s: &Settings) -> &'static str {
+        match s.validate() {
+            Err(Error::InvalidSettings { field, .. }) => field,
+            other => panic!("expected InvalidSettings, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn defaults_are_valid() {
+        Settings::default().validate().unwrap();
+    }
+
+    #[test]
+    fn bottom_above_top_is_refused() {
+        let mut s = Settings::default();
+        s.layer.bottom_altitude = 5_000.0;
+        assert_eq!(refused(&s), "layer.bottom_altitude");
+        let msg = s.validate().unwrap_err().to_string();
+        assert!(msg.contains("top_altitude"), "{msg}");
+    }
+
+    #[test]
+    fn negative_and_nan_values_are_refused() {
+        let mut s = Settings::default();
+        s.planet.radius = -1.0;
+        assert_eq!(refused(&s), "planet.radius");
+        s.planet.radius = f32::NAN;
+        assert_eq!(refused(&s), "planet.radius");
+        let mut s = Settings::default();
+        s.clouds.density = -0.5;
+        assert_eq!(refused(&s), "clouds.density");
+        s.clouds.density = f32::NAN;
+        assert_eq!(refused(&s), "clouds.density");
+        let mut s = Settings::default();
+        s.clouds.extinction = f32::INFINITY;
+        assert_eq!(refused(&s), "clouds.extinction");
+        let s = Settings {
+            debug_density: DebugDensity::Sphere {
+                center: Vec3::ZERO,
+                radius: f32::NAN,
+                density: 1.0,
+            },
+            ..Settings::default()
+        };
+        assert_eq!(refused(&s), "debug_density.radius");
+    }
+
+    #[test]
+    fn sizes_must_be_powers_of_two() {
+        let mut s = Settings::default();
+        s.noise.base_size = 100;
+        assert_eq!(refused(&s), "noise.base_size");
+        let mut s = Settings::default();
+        s.march.min_steps = 200;
+        assert_eq!(refused(&s), "march.min_steps");
+    }
+}

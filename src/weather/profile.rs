@@ -1,0 +1,268 @@
+//! The density model after Schneider (2015, 2017) as described in the Aetherius thesis
+//! ("Density Model"): base shape eroded by low-frequency Worley fBM, per-cloud-type height
+//! profile, coverage from the weather map, softened layer boundaries, and detail erosion that
+//! is wispy at the bottom and billowy at the top. CPU mirror of `shaders/density.wgsl`.
+
+use crate::settings::CloudShape;
+
+/// Linear remap of `v` from [lo, hi] to [new_lo, new_hi] (Aetherius fig. 30), unclamped.
+/// A degenerate source range maps everything below `hi` to `new_lo` and the rest to `new_hi`.
+pub fn remap(v: f32, lo: f32, hi: f32, new_lo: f32, new_hi: f32) -> f32 {
+    let span = hi - lo;
+    let t = if span.abs() < 1e-6 {
+        if v < hi {
+            0.0
+        } else {
+            1.0
+        }
+    } else {
+        (v - lo) / span
+    };
+    new_lo + t * (new_hi - new_lo)
+}
+
+fn saturate(v: f32) -> f32 {
+    v.clamp(0.0, 1.0)
+}
+
+/// A vertical profile as fractions of the layer height: density ramps up from `base` to
+/// `full_bottom`, stays 1 to `full_top`, and falls to 0 at `top`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Profile {
+    /// Fraction where the cloud starts.
+    pub base: f32,
+    /// Fraction where full density is reached.
+    pub full_bottom: f32,
+    /// Fraction where density starts to fall.
+    pub full_top: f32,
+    /// Fraction of the cloud tops.
+    pub top: f32,
+}
+
+/// The four cloud types, at cloud-type values 0, 1/3, 2/3 and 1 of the weather map: stratus
+/// (a thin sheet low in the layer), stratocumulus, cumulus, cumulonimbus (the whole layer).
+pub const PROFILES: [Profile; 4] = [
+    Profile {
+        base: 0.0,
+        full_bottom: 0.03,
+        full_top: 0.08,
+        top: 0.15,
+    },
+    Profile {
+        base: 0.0,
+        full_bottom: 0.06,
+        full_top: 0.2,
+        top: 0.35,
+    },
+    Profile {
+        base: 0.02,
+        full_bottom: 0.1,
+        full_top: 0.4,
+        top: 0.7,
+    },
+    Profile {
+        base: 0.02,
+        full_bottom: 0.1,
+        full_top: 0.75,
+        top: 1.0,
+    },
+];
+
+/// The profile for a continuous cloud type in [0, 1], blending the two nearest types.
+pub fn profile_for_type(cloud_type: f32) -> Profile {
+    let x = saturate(cloud_type) * 3.0;
+    let i = (x.floor() as usize).min(2);
+    let f = x - i as f32;
+    let (a, b) = (PROFILES[i], PROFILES[i + 1]);
+    let lerp = |p: f32, q: f32| p + (q - p) * f;
+    Profile {
+        base: lerp(a.base, b.base),
+        full_bottom: lerp(a.full_bottom, b.full_bottom),
+        full_top: lerp(a.full_top, b.full_top),
+        top: lerp(a.top, b.top),
+    }
+}
+
+/// The height multiplier (Aetherius "ShapeAltering"): a product of a rising and a falling
+/// ramp, for height fraction `h` in the layer.
+pub fn height_profile(h: f32, cloud_type: f32) -> f32 {
+    let p = profile_for_type(cloud_type);
+    let rise = saturate(remap(h, p.base, p.full_bottom, 0.0, 1.0));
+    let fall = saturate(remap(h, p.full_top, p.top, 1.0, 0.0));
+    rise * fall
+}
+
+/// Softening of the whole shell's boundaries (Aetherius "DensityAltering"): fades density in
+/// over `softness` of the layer at the bottom and out over `softness` at the top.
+pub fn layer_softening(h: f32, softness: f32) -> f32 {
+    if softness <= 0.0 {
+        return if (0.0..=1.0).contains(&h) { 1.0 } else { 0.0 };
+    }
+    saturate(h / softness) * saturate((1.0 - h) / softness)
+}
+
+/// One density sample's inputs, as the textures deliver them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NoiseSample {
+    /// Base volume: R Perlin-Worley, G/B/A Worley octaves of rising frequency.
+    pub base: [f32; 4],
+    /// Detail volume: R/G/B Worley octaves.
+    pub detail: [f32; 3],
+    /// Weather map: R coverage, G cloud type, B density.
+    pub weather: [f32; 3],
+}
+
+/// The base shape before detail erosion (the cheap density used to find clouds).
+pub fn base_density(h: f32, s: &NoiseSample, shape: &CloudShape) -> f32 {
+    if !(0.0..=1.0).contains(&h) {
+        return 0.0;
+    }
+    let [r, g, b, a] = s.base;
+    let low_freq_fbm = g * 0.625 + b * 0.25 + a * 0.125;
+    // Carve the Perlin-Worley shape with the Worley fBM.
+    let mut cloud = remap(r, low_freq_fbm - 1.0, 1.0, 0.0, 1.0);
+    cloud *= height_profile(h, s.weather[1]);
+    // Coverage erodes the shape: only the densest parts survive low coverage.
+    let coverage = shape.coverage * s.weather[0];
+    if coverage <= 0.0 {
+        return 0.0;
+    }
+    let covered = saturate(remap(cloud, 1.0 - coverage, 1.0, 0.0, 1.0));
+    covered * layer_softening(h, shape.layer_softness)
+}
+
+/// The full density (before multiplying by extinction): base shape eroded by detail noise,
+/// wispy at the bottom and billowy at the top, times the global and weather-map density.
+pub fn density(h: f32, s: &NoiseSample, shape: &CloudShape) -> f32 {
+    let base = base_density(h, s, shape);
+    if base <= 0.0 {
+        return 0.0;
+    }
+    let [r, g, b] = s.detail;
+    let high_freq_fbm = r * 0.625 + g * 0.25 + b * 0.125;
+    // Wispy (fBM) at the bottom, billowy (inverted fBM) from a fifth of the way up.
+    let mut detail = high_freq_fbm + (1.0 - 2.0 * high_freq_fbm) * saturate(h * 5.0);
+    detail *= shape.detail_strength * (-shape.coverage * 0.75).exp();
+    let eroded = saturate(remap(base, detail, 1.0, 0.0, 1.0));
+    eroded * shape.density * s.weather[2]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample(coverage: f32, cloud_type: f32) -> NoiseSample {
+        NoiseSample {
+            base: [0.8, 0.5, 0.5, 0.5],
+            detail: [0.3, 0.4, 0.5],
+            weather: [coverage, cloud_type, 1.0],
+        }
+    }
+
+    #[test]
+    fn remap_maps_ranges() {
+        assert_eq!(remap(0.5, 0.0, 1.0, 10.0, 20.0), 15.0);
+        assert_eq!(remap(2.0, 1.0, 3.0, 0.0, 1.0), 0.5);
+        assert_eq!(remap(0.25, 0.0, 1.0, 1.0, 0.0), 0.75);
+        // Degenerate range does not divide by zero.
+        assert_eq!(remap(0.5, 1.0, 1.0, 0.0, 1.0), 0.0);
+        assert_eq!(remap(1.0, 1.0, 1.0, 0.0, 1.0), 1.0);
+    }
+
+    #[test]
+    fn height_profiles_have_their_shape() {
+        for (i, p) in PROFILES.iter().enumerate() {
+            let t = i as f32 / 3.0;
+            assert_eq!(height_profile(-0.1, t), 0.0);
+            assert_eq!(
+                height_profile(p.top + 0.01, t),
+                0.0,
+                "type {i} above its top"
+            );
+            let mid = 0.5 * (p.full_bottom + p.full_top);
+            assert!(
+                (height_profile(mid, t) - 1.0).abs() < 1e-6,
+                "type {i} plateau"
+            );
+            // Monotonic ramps.
+            let mut prev = 0.0;
+            for k in 0..=20 {
+                let h = p.base + (p.full_bottom - p.base) * k as f32 / 20.0;
+                let v = height_profile(h, t);
+                assert!(v + 1e-6 >= prev, "type {i} rise at {h}");
+                prev = v;
+            }
+        }
+        // Stratus is thin and low, cumulonimbus fills the layer.
+        assert_eq!(height_profile(0.5, 0.0), 0.0);
+        assert_eq!(height_profile(0.5, 1.0), 1.0);
+        assert!(height_profile(0.9, 1.0) > 0.0);
+        // Types blend continuously.
+        let a = height_profile(0.3, 0.5);
+        assert!(
+            a > height_profile(0.3, 1.0 / 3.0) - 1e-6 && a < height_profile(0.3, 2.0 / 3.0) + 1e-6
+        );
+    }
+
+    #[test]
+    fn layer_softening_fades_the_boundaries() {
+        assert_eq!(layer_softening(0.0, 0.1), 0.0);
+        assert_eq!(layer_softening(1.0, 0.1), 0.0);
+        assert_eq!(layer_softening(0.5, 0.1), 1.0);
+        assert!((layer_softening(0.05, 0.1) - 0.5).abs() < 1e-6);
+        assert_eq!(layer_softening(0.5, 0.0), 1.0);
+    }
+
+    #[test]
+    fn zero_coverage_means_no_cloud() {
+        let mut shape = CloudShape::default();
+        for cov in [0.0, 1.0] {
+            for h in [0.1, 0.3, 0.6] {
+                assert_eq!(
+                    density(
+                        h,
+                        &sample(cov, 1.0),
+                        &CloudShape {
+                            coverage: 0.0,
+                            ..shape
+                        }
+                    ),
+                    0.0
+                );
+            }
+        }
+        shape.coverage = 1.0;
+        assert_eq!(density(0.3, &sample(0.0, 1.0), &shape), 0.0);
+    }
+
+    #[test]
+    fn density_grows_with_coverage_and_vanishes_outside_the_layer() {
+        let mut last = 0.0;
+        for k in 1..=10 {
+            let shape = CloudShape {
+                coverage: k as f32 / 10.0,
+                detail_strength: 0.0,
+                ..CloudShape::default()
+            };
+            let d = base_density(0.3, &sample(1.0, 1.0), &shape);
+            assert!(d >= last, "coverage {k}: {d} < {last}");
+            last = d;
+        }
+        assert!(last > 0.5);
+        let shape = CloudShape::default();
+        assert_eq!(density(-0.01, &sample(1.0, 1.0), &shape), 0.0);
+        assert_eq!(density(1.01, &sample(1.0, 1.0), &shape), 0.0);
+    }
+
+    #[test]
+    fn detail_only_erodes() {
+        let shape = CloudShape {
+            coverage: 0.8,
+            ..CloudShape::default()
+        };
+        for h in [0.1, 0.2, 0.5] {
+            let s = sample(1.0, 1.0);
+            assert!(density(h, &s, &shape) <= base_density(h, &s, &shape) * shape.density + 1e-6);
+        }
+    }
+}
