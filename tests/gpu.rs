@@ -1,0 +1,690 @@
+//! GPU tests on whatever Vulkan adapter is present (Mesa's lavapipe in CI): noise, compositing
+//! invariants, the integrator against a closed form, and errors instead of panics.
+
+use glam::{Mat4, Vec3, Vec4};
+use nimbus::demo::{standard_views, DemoView, Occluder};
+use nimbus::lighting::phase::PhaseModel;
+use nimbus::lighting::scattering::slab_single_scattering;
+use nimbus::settings::{MultipleScattering, NoiseSettings};
+use nimbus::{
+    Camera, ColorTargets, DebugDensity, DepthConvention, Error, FrameInputs, Headless, NoiseVolume,
+    Renderer, Settings, Sun, Targets,
+};
+
+const W: u32 = 160;
+const H: u32 = 90;
+
+fn setup() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        let dir = std::env::temp_dir().join(format!("nimbus-xdg-{}", std::process::id()));
+        let _ = std::fs::create_dir_all(&dir);
+        std::env::set_var("XDG_RUNTIME_DIR", dir);
+    }
+}
+
+fn headless(settings: Settings) -> Headless {
+    setup();
+    let mut h = Headless::new(settings).expect("a Vulkan adapter (install mesa-vulkan-drivers)");
+    h.resize(W, H).unwrap();
+    h
+}
+
+/// Small noise volumes keep the tests quick on software Vulkan.
+fn small_noise(seed: u32) -> Settings {
+    Settings {
+        noise: NoiseSettings {
+            seed,
+            base_size: 32,
+            detail_size: 16,
+            weather_size: 128,
+            blue_noise_size: 16,
+        },
+        ..Settings::default()
+    }
+}
+
+fn render_view(h: &mut Headless, view: &DemoView) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
+    let scene = view.scene(W, H);
+    h.upload_scene(&scene.color, Some(&scene.depth)).unwrap();
+    h.render(&view.frame(W, H, 0.0)).unwrap();
+    (scene.color, h.read_output().unwrap())
+}
+
+fn f16(v: f32) -> f32 {
+    half::f16::from_f32(v).to_f32()
+}
+
+// ---- noise ---------------------------------------------------------------------------------
+
+fn at(v: &[u8], n: usize, x: usize, y: usize, z: usize, c: usize) -> f64 {
+    v[((z * n + y) * n + x) * 4 + c] as f64
+}
+
+/// Mean absolute difference between slices `a` and `b` along `axis`.
+fn slice_diff(v: &[u8], n: usize, axis: usize, a: usize, b: usize, channels: usize) -> f64 {
+    let mut sum = 0.0;
+    for i in 0..n {
+        for j in 0..n {
+            for c in 0..channels {
+                let (p, q) = match axis {
+                    0 => (at(v, n, a, i, j, c), at(v, n, b, i, j, c)),
+                    1 => (at(v, n, i, a, j, c), at(v, n, i, b, j, c)),
+                    _ => (at(v, n, i, j, a, c), at(v, n, i, j, b, c)),
+                };
+                sum += (p - q).abs();
+            }
+        }
+    }
+    sum / (n * n * channels) as f64
+}
+
+#[test]
+fn noise_volumes_tile_across_opposite_faces() {
+    let h = headless(Settings::default());
+    for (which, n, channels) in [(NoiseVolume::Base, 128, 4), (NoiseVolume::Detail, 32, 3)] {
+        let v = h.read_noise(which, 0).unwrap();
+        assert_eq!(v.len(), n * n * n * 4);
+        for axis in 0..3 {
+            // Across the wrap (last slice to first) the noise must change like between any two
+            // neighbouring slices, and much less than between unrelated slices.
+            let wrap = slice_diff(&v, n, axis, n - 1, 0, channels);
+            let interior: f64 = (0..n - 1)
+                .map(|i| slice_diff(&v, n, axis, i, i + 1, channels))
+                .sum::<f64>()
+                / (n - 1) as f64;
+            let far = slice_diff(&v, n, axis, 0, n / 2, channels);
+            assert!(
+                wrap <= interior * 1.15 + 0.5,
+                "{which:?} axis {axis}: wrap {wrap:.2} vs neighbour {interior:.2}"
+            );
+            assert!(
+                far > interior * 2.0,
+                "{which:?} axis {axis}: test cannot discriminate"
+            );
+        }
+    }
+}
+
+#[test]
+fn weather_map_tiles() {
+    let h = headless(Settings::default());
+    let n = Settings::default().noise.weather_size as usize;
+    let v = h.read_weather_map().unwrap();
+    let px = |x: usize, y: usize, c: usize| v[(y * n + x) * 4 + c] as f64;
+    let (mut wrap, mut inner) = (0.0, 0.0);
+    for i in 0..n {
+        for c in 0..3 {
+            wrap += (px(n - 1, i, c) - px(0, i, c)).abs() + (px(i, n - 1, c) - px(i, 0, c)).abs();
+            inner += (px(n / 2, i, c) - px(n / 2 + 1, i, c)).abs()
+                + (px(i, n / 2, c) - px(i, n / 2 + 1, c)).abs();
+        }
+    }
+    assert!(
+        wrap <= inner * 1.5 + n as f64,
+        "wrap {wrap} vs interior {inner}"
+    );
+}
+
+#[test]
+fn same_seed_same_volumes_other_seed_differs() {
+    let a = headless(small_noise(3));
+    let b = headless(small_noise(3));
+    let c = headless(small_noise(4));
+    for which in [NoiseVolume::Base, NoiseVolume::Detail] {
+        let (va, vb, vc) = (
+            a.read_noise(which, 0).unwrap(),
+            b.read_noise(which, 0).unwrap(),
+            c.read_noise(which, 0).unwrap(),
+        );
+        assert_eq!(va, vb, "{which:?}: same seed must give identical bytes");
+        let differing = va.iter().zip(&vc).filter(|(x, y)| x != y).count();
+        assert!(
+            differing * 2 > va.len(),
+            "{which:?}: only {differing} bytes differ"
+        );
+    }
+}
+
+#[test]
+fn mip_levels_average_the_level_below() {
+    let h = headless(small_noise(1));
+    let m0 = h.read_noise(NoiseVolume::Base, 0).unwrap();
+    let m1 = h.read_noise(NoiseVolume::Base, 1).unwrap();
+    let (n0, n1) = (32usize, 16usize);
+    for (x, y, z) in [(0, 0, 0), (5, 9, 2), (15, 15, 15)] {
+        for c in 0..4 {
+            let mut sum = 0.0;
+            for k in 0..8 {
+                sum += at(
+                    &m0,
+                    n0,
+                    2 * x + (k & 1),
+                    2 * y + ((k >> 1) & 1),
+                    2 * z + (k >> 2),
+                    c,
+                );
+            }
+            let got = at(&m1, n1, x, y, z, c);
+            assert!(
+                (got - sum / 8.0).abs() <= 1.0,
+                "mip1 ({x},{y},{z}) c{c}: {got} vs {}",
+                sum / 8.0
+            );
+        }
+    }
+    assert!(matches!(
+        h.read_noise(NoiseVolume::Base, 99),
+        Err(Error::InvalidTarget { .. })
+    ));
+}
+
+// ---- compositing invariants ------------------------------------------------------------------
+
+#[test]
+fn clear_sky_leaves_the_scene_untouched() {
+    let mut settings = small_noise(1);
+    settings.clouds.coverage = 0.0;
+    let mut h = headless(settings);
+    for view in standard_views() {
+        let (scene, out) = render_view(&mut h, &view);
+        let clouds = h.read_clouds().unwrap();
+        assert!(
+            clouds.iter().all(|c| c == &[0.0, 0.0, 0.0, 1.0]),
+            "{}: L != 0 or T != 1",
+            view.name
+        );
+        for (s, o) in scene.iter().zip(&out) {
+            assert_eq!(s.map(f16), *o, "{}", view.name);
+        }
+    }
+}
+
+#[test]
+fn snapshot_views_have_no_nan_or_inf_and_show_clouds() {
+    let mut h = headless(small_noise(1));
+    for view in standard_views() {
+        let (scene, out) = render_view(&mut h, &view);
+        assert!(
+            out.iter().flatten().all(|v| v.is_finite()),
+            "{}: non-finite output",
+            view.name
+        );
+        let clouds = h.read_clouds().unwrap();
+        assert!(
+            clouds.iter().flatten().all(|v| v.is_finite() && *v >= 0.0),
+            "{}",
+            view.name
+        );
+        assert!(clouds.iter().all(|c| c[3] <= 1.0), "{}: T > 1", view.name);
+        let depth = h.read_cloud_depth().unwrap();
+        assert!(
+            depth.iter().all(|d| d.is_finite() && *d >= 0.0),
+            "{}",
+            view.name
+        );
+        // Every standard view shows some cloud, and changes some pixels.
+        let cloudy = clouds.iter().filter(|c| c[3] < 0.9).count();
+        assert!(cloudy > 0, "{}: no cloud in view", view.name);
+        assert!(
+            scene.iter().zip(&out).any(|(s, o)| s.map(f16) != *o),
+            "{}",
+            view.name
+        );
+    }
+}
+
+#[test]
+fn pixels_nearer_than_the_clouds_are_unchanged() {
+    let mut settings = small_noise(1);
+    settings.clouds.coverage = 1.0; // clouds everywhere above the wall
+    let mut h = headless(settings);
+    let mut view = standard_views()[0];
+    // A wall 400 m away, below the cloud base, covering the lower 60% of the image.
+    view.occluder = Occluder::NearWall {
+        distance: 400.0,
+        fraction: 0.6,
+    };
+    let scene = view.scene(W, H);
+    h.upload_scene(&scene.color, Some(&scene.depth)).unwrap();
+    h.render(&view.frame(W, H, 0.0)).unwrap();
+    let out = h.read_output().unwrap();
+    let mut occluded = 0;
+    let mut changed_sky = 0;
+    for ((depth, color), got) in scene.depth.iter().zip(&scene.color).zip(&out) {
+        if *depth < 1.0 {
+            assert_eq!(*got, color.map(f16), "an occluded pixel changed");
+            occluded += 1;
+        } else if *got != color.map(f16) {
+            changed_sky += 1;
+        }
+    }
+    assert!(
+        occluded > (W * H) as usize / 2,
+        "the wall covers {occluded} pixels"
+    );
+    assert!(
+        changed_sky > 0,
+        "clouds must still cover the sky above the wall"
+    );
+}
+
+#[test]
+fn in_place_composite_matches_separate_output() {
+    let mut settings = small_noise(1);
+    settings.march.jitter = false; // the jitter pattern rotates every frame
+    let mut h = headless(settings);
+    let view = standard_views()[0];
+    let (_, separate) = render_view(&mut h, &view);
+    h.set_in_place(true);
+    let (_, in_place) = render_view(&mut h, &view);
+    for (a, b) in separate.iter().zip(&in_place) {
+        for c in 0..4 {
+            assert!(
+                (a[c] - b[c]).abs() <= 2e-3 * a[c].abs().max(1.0),
+                "{a:?} vs {b:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn depth_conventions_see_the_same_clouds() {
+    let mut settings = small_noise(1);
+    settings.march.jitter = false; // the jitter pattern rotates every frame
+    let mut h = headless(settings);
+    let view = standard_views()[0];
+    let scene = view.scene(W, H);
+    h.upload_scene(&scene.color, None).unwrap();
+    let base = view.frame(W, H, 0.0);
+    h.render(&base).unwrap();
+    let reference = h.read_clouds().unwrap();
+    let aspect = W as f32 / H as f32;
+    for (projection, depth) in [
+        (
+            Mat4::perspective_infinite_reverse_rh(view.fov_y, aspect, 1.0),
+            DepthConvention {
+                reversed_z: true,
+                infinite_far: true,
+            },
+        ),
+        (
+            Mat4::perspective_infinite_rh(view.fov_y, aspect, 1.0),
+            DepthConvention {
+                reversed_z: false,
+                infinite_far: true,
+            },
+        ),
+    ] {
+        let mut frame = base;
+        frame.camera.projection = projection;
+        frame.camera.depth = depth;
+        h.render(&frame).unwrap();
+        let got = h.read_clouds().unwrap();
+        let worst = reference
+            .iter()
+            .zip(&got)
+            .map(|(a, b)| (a[3] - b[3]).abs())
+            .fold(0.0f32, f32::max);
+        assert!(worst < 0.02, "{depth:?}: transmittance differs by {worst}");
+    }
+}
+
+// ---- the integrator against a closed form ----------------------------------------------------
+
+#[test]
+fn homogeneous_slab_matches_closed_form_single_scattering() {
+    let (bottom, top, extinction) = (1_000.0f32, 1_500.0f32, 0.004f32);
+    let mut settings = small_noise(1);
+    settings.debug_density = DebugDensity::Slab {
+        bottom_altitude: bottom,
+        top_altitude: top,
+        density: 1.0,
+    };
+    settings.clouds.extinction = extinction;
+    settings.clouds.albedo = 1.0;
+    settings.lighting.multiple_scattering = MultipleScattering {
+        octaves: 1,
+        ..Default::default()
+    };
+    settings.lighting.ambient_top = Vec3::ZERO;
+    settings.lighting.ambient_bottom = Vec3::ZERO;
+    settings.lighting.light_distance = 100_000.0;
+    settings.haze.fade_distance = f32::INFINITY;
+    settings.march.min_steps = 256;
+    settings.march.max_steps = 256;
+    settings.march.transmittance_cutoff = 0.0;
+    let phase = settings.lighting.phase;
+    let mut h = headless(settings);
+
+    let eye = Vec3::new(0.0, 2.0, 0.0);
+    let view = Mat4::look_at_rh(eye, eye + Vec3::Y, Vec3::Z);
+    let projection = Mat4::perspective_rh(25f32.to_radians(), W as f32 / H as f32, 1.0, 1e5);
+    let sun_dir = Vec3::new(0.3, 0.85, 0.2).normalize();
+    let sun = Sun {
+        direction: sun_dir,
+        color: Vec3::ONE,
+        illuminance: 10.0,
+    };
+    let frame = FrameInputs {
+        camera: Camera {
+            view,
+            projection,
+            depth: DepthConvention::default(),
+        },
+        sun,
+        time: 0.0,
+    };
+    h.upload_scene(&vec![[0.0; 4]; (W * H) as usize], None)
+        .unwrap();
+    h.render(&frame).unwrap();
+    let clouds = h.read_clouds().unwrap();
+
+    let inv = (projection * view).inverse();
+    let mut worst_l = 0.0f32;
+    let mut worst_t = 0.0f32;
+    for y in 0..H {
+        for x in 0..W {
+            let ndc_x = (x as f32 + 0.5) / W as f32 * 2.0 - 1.0;
+            let ndc_y = 1.0 - (y as f32 + 0.5) / H as f32 * 2.0;
+            let p = inv * Vec4::new(ndc_x, ndc_y, 0.0, 1.0);
+            let dir = (p.truncate() / p.w - eye).normalize();
+            let (l, t) = slab_single_scattering(
+                extinction,
+                1.0,
+                top - bottom,
+                dir.y,
+                sun_dir.y,
+                phase.eval(sun_dir.dot(dir), 1.0),
+                10.0,
+            );
+            let got = clouds[(y * W + x) as usize];
+            worst_l = worst_l.max((got[0] - l).abs() / l);
+            worst_t = worst_t.max((got[3] - t).abs());
+        }
+    }
+    assert!(worst_l < 0.02, "radiance off by {:.2}%", worst_l * 100.0);
+    assert!(worst_t < 0.005, "transmittance off by {worst_t}");
+}
+
+#[test]
+fn homogeneous_sphere_is_round_and_transmits_by_beer_lambert() {
+    let mut settings = small_noise(1);
+    let center = Vec3::new(0.0, 2_000.0, -3_000.0);
+    settings.debug_density = DebugDensity::Sphere {
+        center,
+        radius: 500.0,
+        density: 1.0,
+    };
+    settings.clouds.extinction = 0.002;
+    settings.march.min_steps = 128;
+    settings.march.max_steps = 128;
+    settings.march.transmittance_cutoff = 0.0;
+    let mut h = headless(settings);
+    let eye = Vec3::new(0.0, 2_000.0, 0.0);
+    let frame = FrameInputs {
+        camera: Camera {
+            view: Mat4::look_at_rh(eye, center, Vec3::Y),
+            projection: Mat4::perspective_rh(30f32.to_radians(), W as f32 / H as f32, 1.0, 1e5),
+            depth: DepthConvention::default(),
+        },
+        sun: Sun::default(),
+        time: 0.0,
+    };
+    h.upload_scene(&vec![[0.0; 4]; (W * H) as usize], None)
+        .unwrap();
+    h.render(&frame).unwrap();
+    let clouds = h.read_clouds().unwrap();
+    // The center ray crosses the full diameter: T = exp(-σ 2r) = exp(-2).
+    let c = clouds[((H / 2) * W + W / 2) as usize];
+    assert!((c[3] - (-2.0f32).exp()).abs() < 0.01, "center T {}", c[3]);
+    // Corners miss the sphere entirely.
+    assert_eq!(clouds[0], [0.0, 0.0, 0.0, 1.0]);
+}
+
+// ---- errors, never panics ----------------------------------------------------------------------
+
+#[test]
+fn bad_settings_and_frames_are_errors() {
+    setup();
+    let mut bad = Settings::default();
+    bad.layer.bottom_altitude = 9_000.0;
+    assert!(matches!(
+        Headless::new(bad),
+        Err(Error::InvalidSettings { .. })
+    ));
+    let mut h = headless(small_noise(1));
+    let view = standard_views()[0];
+    let mut frame = view.frame(W, H, 0.0);
+    frame.camera.view.x_axis.x = f32::NAN;
+    let e = h.render(&frame).unwrap_err();
+    assert!(e.to_string().contains("camera.view"), "{e}");
+    let mut frame = view.frame(W, H, 0.0);
+    frame.camera.projection = Mat4::ZERO;
+    assert!(matches!(h.render(&frame), Err(Error::InvalidFrame { .. })));
+    // Still usable afterwards.
+    h.render(&view.frame(W, H, 0.0)).unwrap();
+    // Bad settings at runtime leave the old ones in place.
+    let mut s = small_noise(1);
+    s.clouds.density = f32::NAN;
+    assert!(h.renderer_mut().set_settings(s).is_err());
+    assert!(h.renderer_mut().settings().clouds.density.is_finite());
+}
+
+#[test]
+fn bad_sizes_and_scene_data_are_errors() {
+    let mut h = headless(small_noise(1));
+    assert!(matches!(h.resize(0, 10), Err(Error::InvalidTarget { .. })));
+    assert!(matches!(
+        h.resize(10, 100_000),
+        Err(Error::InvalidTarget { .. })
+    ));
+    assert!(matches!(
+        h.upload_scene(&[[0.0; 4]; 3], None),
+        Err(Error::InvalidTarget {
+            target: "scene_color",
+            ..
+        })
+    ));
+    let color = vec![[0.0; 4]; (W * H) as usize];
+    assert!(matches!(
+        h.upload_scene(&color, Some(&[0.5; 7])),
+        Err(Error::InvalidTarget {
+            target: "scene_depth",
+            ..
+        })
+    ));
+    let mut depth = vec![0.5; (W * H) as usize];
+    depth[3] = f32::NAN;
+    assert!(h.upload_scene(&color, Some(&depth)).is_err());
+}
+
+fn texture(
+    device: &wgpu::Device,
+    w: u32,
+    h: u32,
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::Texture {
+    device.create_texture(&wgpu::TextureDescriptor {
+        label: None,
+        size: wgpu::Extent3d {
+            width: w,
+            height: h,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
+    })
+}
+
+#[test]
+fn renderer_refuses_bad_targets_and_turns_wgpu_errors_into_errors() {
+    setup();
+    let (device, queue, _) = nimbus::headless::create_device().unwrap();
+    let mut r = Renderer::new(&device, &queue, small_noise(1)).unwrap();
+    use wgpu::TextureFormat as F;
+    use wgpu::TextureUsages as U;
+    let rw = U::RENDER_ATTACHMENT | U::TEXTURE_BINDING;
+    let out = texture(&device, W, H, F::Rgba16Float, rw).create_view(&Default::default());
+    let mut enc = device.create_command_encoder(&Default::default());
+    let in_place = Targets {
+        color: ColorTargets::InPlace(&out),
+        depth: None,
+    };
+    assert!(matches!(
+        r.encode(&mut enc, &in_place),
+        Err(Error::NotPrepared)
+    ));
+    r.prepare(&standard_views()[0].frame(W, H, 0.0)).unwrap();
+
+    // Unsupported formats.
+    let uint = texture(&device, W, H, F::Rgba8Uint, rw).create_view(&Default::default());
+    let e = r
+        .encode(
+            &mut enc,
+            &Targets {
+                color: ColorTargets::InPlace(&uint),
+                depth: None,
+            },
+        )
+        .unwrap_err();
+    assert!(
+        matches!(
+            e,
+            Error::UnsupportedFormat {
+                target: "output",
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let f32out = texture(&device, W, H, F::Rgba32Float, rw).create_view(&Default::default());
+    assert!(matches!(
+        r.encode(
+            &mut enc,
+            &Targets {
+                color: ColorTargets::InPlace(&f32out),
+                depth: None
+            }
+        ),
+        Err(Error::UnsupportedFormat { .. })
+    ));
+    let bad_depth =
+        texture(&device, W, H, F::Rg32Float, U::TEXTURE_BINDING).create_view(&Default::default());
+    assert!(matches!(
+        r.encode(
+            &mut enc,
+            &Targets {
+                color: ColorTargets::InPlace(&out),
+                depth: Some(&bad_depth)
+            }
+        ),
+        Err(Error::UnsupportedFormat {
+            target: "scene_depth",
+            ..
+        })
+    ));
+    // Mismatched sizes and missing usage.
+    let small = texture(&device, W / 2, H, F::Depth32Float, U::TEXTURE_BINDING)
+        .create_view(&Default::default());
+    let e = r
+        .encode(
+            &mut enc,
+            &Targets {
+                color: ColorTargets::InPlace(&out),
+                depth: Some(&small),
+            },
+        )
+        .unwrap_err();
+    assert!(e.to_string().contains("80x90"), "{e}");
+    let no_render =
+        texture(&device, W, H, F::Rgba16Float, U::TEXTURE_BINDING).create_view(&Default::default());
+    assert!(matches!(
+        r.encode(
+            &mut enc,
+            &Targets {
+                color: ColorTargets::InPlace(&no_render),
+                depth: None
+            }
+        ),
+        Err(Error::InvalidTarget {
+            target: "output",
+            ..
+        })
+    ));
+    assert!(matches!(
+        r.encode(
+            &mut enc,
+            &Targets {
+                color: ColorTargets::Separate {
+                    scene: &out,
+                    output: &out
+                },
+                depth: None
+            }
+        ),
+        Err(Error::InvalidTarget { .. })
+    ));
+    // A depth-stencil view that includes the stencil aspect passes our checks but not wgpu's
+    // binding validation: that must come back as Error::Gpu, not a panic.
+    let ds = texture(&device, W, H, F::Depth24PlusStencil8, U::TEXTURE_BINDING)
+        .create_view(&Default::default());
+    let e = r
+        .encode(
+            &mut enc,
+            &Targets {
+                color: ColorTargets::InPlace(&out),
+                depth: Some(&ds),
+            },
+        )
+        .unwrap_err();
+    assert!(matches!(e, Error::Gpu(_)), "{e}");
+
+    // The renderer is still usable, and pipelines are cached per output format.
+    r.prepare(&standard_views()[0].frame(W, H, 0.0)).unwrap();
+    let mut enc = device.create_command_encoder(&Default::default());
+    r.encode(&mut enc, &in_place).unwrap();
+    let count = r.cached_pipeline_count();
+    r.prepare(&standard_views()[0].frame(W, H, 1.0)).unwrap();
+    r.encode(&mut enc, &in_place).unwrap();
+    assert_eq!(
+        r.cached_pipeline_count(),
+        count,
+        "same format must reuse its pipeline"
+    );
+    let rgba8 = texture(&device, W, H, F::Rgba8UnormSrgb, rw).create_view(&Default::default());
+    r.prepare(&standard_views()[0].frame(W, H, 2.0)).unwrap();
+    r.encode(
+        &mut enc,
+        &Targets {
+            color: ColorTargets::InPlace(&rgba8),
+            depth: None,
+        },
+    )
+    .unwrap();
+    assert_eq!(r.cached_pipeline_count(), count + 1);
+    queue.submit([enc.finish()]);
+    device.poll(wgpu::PollType::wait_indefinitely()).unwrap();
+
+    // A non-invertible camera is refused at prepare and encode then refuses stale state.
+    let mut frame = standard_views()[0].frame(W, H, 0.0);
+    frame.camera.view = Mat4::ZERO;
+    assert!(r.prepare(&frame).is_err());
+    let mut enc = device.create_command_encoder(&Default::default());
+    assert!(matches!(
+        r.encode(&mut enc, &in_place),
+        Err(Error::NotPrepared)
+    ));
+    // Phase model variant renders too.
+    let mut s = small_noise(1);
+    s.lighting.phase = PhaseModel::DualLobeHg {
+        g_forward: 0.8,
+        g_backward: -0.3,
+        forward_weight: 0.7,
+    };
+    r.set_settings(s).unwrap();
+}
