@@ -78,6 +78,10 @@ fn sample_density(p: vec3f, cheap: bool) -> f32 {
     }
     let horizontal = vec2f(dot(p, u.tangent_x.xyz), dot(p, u.tangent_z.xyz));
     let weather = textureSampleLevel(weather_tex, noise_sampler, (horizontal + u.wind.xy) * u.scales.z, 0.0);
+    // Empty space is cheap: no coverage here means no base or detail fetch at all.
+    if (u.shape.x * weather.r <= 0.0) {
+        return 0.0;
+    }
     let q = vec3f(horizontal.x + u.wind.z, h, horizontal.y + u.wind.w);
     let base = textureSampleLevel(base_tex, noise_sampler, q * u.scales.x, 0.0);
     let b = base_density(hf, base, weather.rgb, u.shape.x, u.layer.z);

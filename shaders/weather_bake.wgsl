@@ -25,7 +25,7 @@ fn bake_weather(@builtin(global_invocation_id) id: vec3u) {
     let perlin_v = perlin_fbm(p, f, 4, 0.5, s);
     let worley_v = worley_fbm(p, f, s + 3u);
     let cells = clamp(remap(perlin_v, worley_v - 1.0, 1.0, 0.0, 1.0), 0.0, 1.0);
-    let coverage = smoothstep(0.5, 0.92, cells);
+    let coverage = smoothstep(0.35, 1.0, cells);
     let type_noise = perlin_fbm(p, max(f / 3, 1), 3, 0.5, s + 6u) - 0.5;
     let cloud_type = clamp(params.weather.x + 2.0 * type_noise * params.weather.y, 0.0, 1.0);
     let density = 1.0 - params.weather.z * perlin_fbm(p, f * 2, 2, 0.5, s + 9u);

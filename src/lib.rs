@@ -42,3 +42,9 @@ pub use wgpu;
 
 /// Crate version, from Cargo.toml.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+pub use glam;
+
+/// The README's Rust example, compiled as a doctest so it cannot rot.
+#[doc = include_str!("../README.md")]
+#[cfg(doctest)]
+pub struct ReadmeDoctests;

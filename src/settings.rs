@@ -56,7 +56,7 @@ pub struct CloudLayer {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct CloudShape {
     /// Global coverage in [0, 1], multiplied with the weather map's coverage. 0 = clear sky.
-    /// Default 0.55.
+    /// Default 0.45.
     pub coverage: f32,
     /// Global density multiplier, >= 0. Default 1.
     pub density: f32,
@@ -224,7 +224,7 @@ impl Default for CloudLayer {
 impl Default for CloudShape {
     fn default() -> Self {
         Self {
-            coverage: 0.55,
+            coverage: 0.45,
             density: 1.0,
             extinction: 0.04,
             albedo: 0.99,
