@@ -120,7 +120,9 @@ fn sun_optical_depth(p: vec3f) -> f32 {
     var tau = 0.0;
     var len = unit;
     for (var i = 0u; i < n; i++) {
-        tau += sample_density(p + d * (t + 0.5 * len), false) * len;
+        // Far light samples only see the base shape: detail is invisible in a soft shadow
+        // (Schneider 2015), and it saves a third of the fetches.
+        tau += sample_density(p + d * (t + 0.5 * len), i >= 2u) * len;
         t += len;
         len *= 2.0;
     }
