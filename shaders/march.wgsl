@@ -169,7 +169,11 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
     let thickness = u.layer.y - u.layer.x;
     let n_f = mix(u.march.x, u.march.y, clamp(total / (4.0 * thickness), 0.0, 1.0));
     let n = max(u32(ceil(n_f)), 1u);
-    let dt = total / f32(n);
+    // Steps grow with distance on long paths: sample k sits at s = total (k / n)^p, p from 1
+    // (paths up to a layer thick) to 2 (five layers and more), so the cloud around the camera
+    // is resolved finely and the far horizon coarsely. Consecutive positions partition
+    // [0, total] exactly, which keeps Hillaire's per-step integral energy-conserving.
+    let power = 1.0 + clamp((total - thickness) / (4.0 * thickness), 0.0, 1.0);
 
     // Blue-noise jitter of the sample position inside each step, rotated per frame by the
     // golden ratio so that temporal accumulation sees fresh offsets.
@@ -194,8 +198,10 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
     var radiance = vec3f(0.0);
     var transmittance = 1.0;
     var depth_weighted = 0.0;
+    let inv_n = 1.0 / f32(n);
     for (var i = 0u; i < n; i++) {
-        let s = (f32(i) + jitter) * dt;
+        let s = total * pow((f32(i) + jitter) * inv_n, power);
+        let dt = total * (pow(f32(i + 1u) * inv_n, power) - pow(f32(i) * inv_n, power));
         let t = select(seg.b.x + (s - len_a), seg.a.x + s, s < len_a);
         let p = cam + dir * t;
         let density = sample_density(p, false);
