@@ -72,11 +72,12 @@ fn run() -> Result<(), String> {
     Ok(())
 }
 
-/// Writes the weather map and one slice of each noise volume as PNGs, for inspection.
+/// Writes the weather map (RGB: layer coverage; cirrus streaks in alpha are not shown) and one
+/// slice of each noise volume as PNGs, for inspection.
 fn write_textures(nimbus: &Headless, out: &std::path::Path) -> Result<(), String> {
     let settings = Settings::default();
     let n = settings.noise.weather_size;
-    let weather = nimbus.read_weather_map().map_err(|e| e.to_string())?;
+    let (weather, _) = nimbus.read_weather_maps().map_err(|e| e.to_string())?;
     let rgb: Vec<u8> = weather.chunks(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
     let path = out.join("texture_weather_map.png");
     image::RgbImage::from_raw(n, n, rgb)

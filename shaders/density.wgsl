@@ -26,25 +26,30 @@ fn layer_softening(h: f32, softness: f32) -> f32 {
     return clamp(h / softness, 0.0, 1.0) * clamp((1.0 - h) / softness, 0.0, 1.0);
 }
 
-// Base shape before detail erosion. `weather` = (coverage, type, density).
-fn base_density(h: f32, base: vec4f, weather: vec3f, coverage: f32, softness: f32) -> f32 {
+// Base shape before detail erosion. `coverage` holds each layer's effective coverage
+// (global × weather map), `types` each layer's cloud type; the densest layer wins.
+fn base_density(h: f32, base: vec4f, coverage: vec3f, types: vec3f, softness: f32) -> f32 {
     if (h < 0.0 || h > 1.0) {
         return 0.0;
     }
     let low_freq_fbm = base.g * 0.625 + base.b * 0.25 + base.a * 0.125;
-    let cloud = remap(base.r, low_freq_fbm - 1.0, 1.0, 0.0, 1.0) * height_profile(h, weather.y);
-    let c = coverage * weather.x;
-    if (c <= 0.0) {
-        return 0.0;
+    let carved = remap(base.r, low_freq_fbm - 1.0, 1.0, 0.0, 1.0);
+    var best = 0.0;
+    for (var i = 0; i < 3; i++) {
+        let c = coverage[i];
+        if (c <= 0.0) {
+            continue;
+        }
+        let cloud = carved * height_profile(h, types[i]);
+        best = max(best, clamp(remap(cloud, 1.0 - c, 1.0, 0.0, 1.0), 0.0, 1.0));
     }
-    let covered = clamp(remap(cloud, 1.0 - c, 1.0, 0.0, 1.0), 0.0, 1.0);
-    return covered * layer_softening(h, softness);
+    return best * layer_softening(h, softness);
 }
 
 // Detail erosion: wispy at the bottom, billowy higher up; returns density before extinction.
-fn eroded_density(h: f32, base: f32, detail: vec3f, coverage: f32, strength: f32, density: f32, weather_density: f32) -> f32 {
+fn eroded_density(h: f32, base: f32, detail: vec3f, coverage: f32, strength: f32, density: f32) -> f32 {
     let high_freq_fbm = detail.r * 0.625 + detail.g * 0.25 + detail.b * 0.125;
     var d = high_freq_fbm + (1.0 - 2.0 * high_freq_fbm) * clamp(h * 5.0, 0.0, 1.0);
     d *= strength * exp(-coverage * 0.75);
-    return clamp(remap(base, d, 1.0, 0.0, 1.0), 0.0, 1.0) * density * weather_density;
+    return clamp(remap(base, d, 1.0, 0.0, 1.0), 0.0, 1.0) * density;
 }

@@ -23,17 +23,22 @@ struct MarchUniforms {
     debug_sphere: vec4f,    // sphere center xyz, radius
     tangent_x: vec4f,       // world-space horizontal axis for the weather map, w: frame index
     tangent_z: vec4f,       // second horizontal axis, w: unused
+    layer_types: vec4f,     // cloud type of layers 1-3, w: weight of the "to" weather map
+    horizon: vec4f,         // horizon gradient: strength, start distance (m), coverage, type
+    cirrus: vec4f,          // high layer: coverage, altitude (m), optical depth, unused
+    skew: vec4f,            // xyz: how far (m) cloud tops lean downwind of their bases
 }
 
 @group(0) @binding(0) var<uniform> u: MarchUniforms;
 @group(0) @binding(1) var base_tex: texture_3d<f32>;
 @group(0) @binding(2) var detail_tex: texture_3d<f32>;
-@group(0) @binding(3) var weather_tex: texture_2d<f32>;
+@group(0) @binding(3) var weather_from: texture_2d<f32>;
 @group(0) @binding(4) var blue_noise: texture_2d<f32>;
 @group(0) @binding(5) var noise_sampler: sampler;
 //!SCENE_DEPTH_BINDING
 @group(0) @binding(7) var march_out: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(8) var depth_out: texture_storage_2d<r32float, write>;
+@group(0) @binding(9) var weather_to: texture_2d<f32>;
 
 const DEBUG_OFF: u32 = 0u;
 const DEBUG_SLAB: u32 = 1u;
@@ -59,6 +64,25 @@ fn scene_distance(ndc: vec2f, depth: f32) -> f32 {
     return length(p.xyz / p.w - u.camera.xyz);
 }
 
+fn horizontal_of(p: vec3f) -> vec2f {
+    return vec2f(dot(p, u.tangent_x.xyz), dot(p, u.tangent_z.xyz));
+}
+
+// The weather map at a horizontal position: the running transition's two maps, blended.
+fn weather_at(horizontal: vec2f) -> vec4f {
+    let uv = (horizontal + u.wind.xy) * u.scales.z;
+    let w = u.layer_types.w;
+    // Outside a transition only one map counts: one fetch (uniform branch, no divergence).
+    if (w >= 1.0) {
+        return textureSampleLevel(weather_to, noise_sampler, uv, 0.0);
+    }
+    let a = textureSampleLevel(weather_from, noise_sampler, uv, 0.0);
+    if (w <= 0.0) {
+        return a;
+    }
+    return mix(a, textureSampleLevel(weather_to, noise_sampler, uv, 0.0), w);
+}
+
 // Unitless density at p (σt = density × extinction); `cheap` skips the detail erosion.
 fn sample_density(p: vec3f, cheap: bool) -> f32 {
     let up = u.planet.xyz;
@@ -76,21 +100,71 @@ fn sample_density(p: vec3f, cheap: bool) -> f32 {
     if (hf < 0.0 || hf > 1.0) {
         return 0.0;
     }
-    let horizontal = vec2f(dot(p, u.tangent_x.xyz), dot(p, u.tangent_z.xyz));
-    let weather = textureSampleLevel(weather_tex, noise_sampler, (horizontal + u.wind.xy) * u.scales.z, 0.0);
+    let horizontal = horizontal_of(p);
+    let weather = weather_at(horizontal);
+    var coverage = u.shape.x * weather.rgb;
+    var types = u.layer_types.xyz;
+    // Horizon Zero Dawn's gradient: far away, layer 1 tends to big cumulus at a set coverage.
+    if (u.horizon.x > 0.0) {
+        let far = length(horizontal - horizontal_of(u.camera.xyz));
+        let g = u.horizon.x * smoothstep(u.horizon.y, u.horizon.y * 1.6 + 1.0, far);
+        coverage.x = mix(coverage.x, max(coverage.x, u.horizon.z), g);
+        types.x = mix(types.x, u.horizon.w, g);
+    }
     // Empty space is cheap: no coverage here means no base or detail fetch at all.
-    if (u.shape.x * weather.r <= 0.0) {
+    if (max(coverage.x, max(coverage.y, coverage.z)) <= 0.0) {
         return 0.0;
     }
-    let q = vec3f(horizontal.x + u.wind.z, h, horizontal.y + u.wind.w);
+    // Wind shear: higher parts of a cloud lean downwind.
+    let sheared = horizontal_of(p + u.skew.xyz * hf);
+    let q = vec3f(sheared.x + u.wind.z, h, sheared.y + u.wind.w);
     let base = textureSampleLevel(base_tex, noise_sampler, q * u.scales.x, 0.0);
-    let b = base_density(hf, base, weather.rgb, u.shape.x, u.layer.z);
+    let b = base_density(hf, base, coverage, types, u.layer.z);
     if (b <= 0.0 || cheap) {
-        return b * u.shape.y * weather.b;
+        return b * u.shape.y;
     }
-    let qd = vec3f(horizontal.x + u.wind_detail.x, h, horizontal.y + u.wind_detail.y);
+    let qd = vec3f(sheared.x + u.wind_detail.x, h, sheared.y + u.wind_detail.y);
     let detail = textureSampleLevel(detail_tex, noise_sampler, qd * u.scales.y, 0.0).rgb;
-    return eroded_density(hf, b, detail, u.shape.x, u.scales.w, u.shape.y, weather.b);
+    return eroded_density(hf, b, detail, u.shape.x, u.scales.w, u.shape.y);
+}
+
+struct Cirrus {
+    radiance: vec3f,
+    transmittance: f32,
+    distance: f32,
+}
+
+// The high layer: a textured sheet at one altitude, lit by single scattering through its
+// small optical depth (L = (1 - T) (E p + ambient) for a thin, non-absorbing sheet).
+fn cirrus_layer(cam: vec3f, dir: vec3f, max_t: f32, cos_theta: f32, sun_radiance: vec3f) -> Cirrus {
+    var none = Cirrus(vec3f(0.0), 1.0, 0.0);
+    let up = u.planet.xyz;
+    let radius = u.planet.w;
+    let h_cam = altitude(cam, up, radius);
+    let r = sphere_roots(cam, dir, up, radius, u.cirrus.y);
+    if (!r.hit) {
+        return none;
+    }
+    let t = select(r.t0, r.t1, h_cam < u.cirrus.y);
+    if (t <= 0.0 || t > max_t) {
+        return none;
+    }
+    let g = sphere_roots(cam, dir, up, radius, 0.0);
+    if (h_cam >= 0.0 && g.hit && g.t0 > 0.0 && g.t0 < t) {
+        return none;
+    }
+    let p = cam + dir * t;
+    let streak = weather_at(horizontal_of(p)).a;
+    let density = clamp(remap(streak, 1.0 - u.cirrus.x, 1.0, 0.0, 1.0), 0.0, 1.0);
+    let mu = max(abs(dot(normalize(p + up * radius), dir)), 0.05);
+    let transmittance = exp(-u.cirrus.z * density / mu);
+    // Ice crystals scatter less forward than droplets: eccentricity scaled by 0.7.
+    let source = sun_radiance * phase_eval(u32(u.misc.y), u.phase, cos_theta, 0.7) + u.ambient_top.rgb;
+    return Cirrus((1.0 - transmittance) * source, transmittance, t);
+}
+
+fn haze_fade(distance: f32) -> f32 {
+    return exp(-max(distance - u.haze.w, 0.0) * u.misc.x);
 }
 
 // Where a ray from p toward the sun leaves the medium (m).
@@ -159,86 +233,101 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
     let len_a = select(0.0, seg.a.y - seg.a.x, seg.count > 0u);
     let len_b = select(0.0, seg.b.y - seg.b.x, seg.count > 1u);
     let total = len_a + len_b;
-    if (total <= 0.0 || (u.shape.x <= 0.0 && debug_mode() == DEBUG_OFF)) {
-        textureStore(march_out, id.xy, vec4f(0.0, 0.0, 0.0, 1.0));
-        textureStore(depth_out, id.xy, vec4f(0.0));
-        return;
-    }
-
-    // Step count grows with the length inside the layer (long horizon paths get more steps).
-    let thickness = u.layer.y - u.layer.x;
-    let n_f = mix(u.march.x, u.march.y, clamp(total / (4.0 * thickness), 0.0, 1.0));
-    let n = max(u32(ceil(n_f)), 1u);
-    // Steps grow with distance on long paths: sample k sits at s = total (k / n)^p, p from 1
-    // (paths up to a layer thick) to 2 (five layers and more), so the cloud around the camera
-    // is resolved finely and the far horizon coarsely. Consecutive positions partition
-    // [0, total] exactly, which keeps Hillaire's per-step integral energy-conserving.
-    let power = 1.0 + clamp((total - thickness) / (4.0 * thickness), 0.0, 1.0);
-
-    // Blue-noise jitter of the sample position inside each step, rotated per frame by the
-    // golden ratio so that temporal accumulation sees fresh offsets.
-    var jitter = 0.5;
-    if (u.march.w > 0.5) {
-        let bn_size = textureDimensions(blue_noise);
-        let bn = textureLoad(blue_noise, id.xy % bn_size, 0).r;
-        jitter = fract(bn + u.tangent_x.w * 0.61803398875);
-    }
-
-    // Phase per multiple-scattering octave (Wrenninge: eccentricity scaled by c^i).
     let cos_theta = dot(u.sun.xyz, dir);
-    let octaves = u32(u.ms.x);
-    var phase_oct: array<f32, 8>;
-    var c_i = 1.0;
-    for (var i = 0u; i < octaves; i++) {
-        phase_oct[i] = phase_eval(u32(u.misc.y), u.phase, cos_theta, c_i);
-        c_i *= u.ms.w;
-    }
     let sun_radiance = u.sun.w * u.sun_color.rgb;
-
     var radiance = vec3f(0.0);
     var transmittance = 1.0;
-    var depth_weighted = 0.0;
-    let inv_n = 1.0 / f32(n);
-    for (var i = 0u; i < n; i++) {
-        let s = total * pow((f32(i) + jitter) * inv_n, power);
-        let dt = total * (pow(f32(i + 1u) * inv_n, power) - pow(f32(i) * inv_n, power));
-        let t = select(seg.b.x + (s - len_a), seg.a.x + s, s < len_a);
-        let p = cam + dir * t;
-        let density = sample_density(p, false);
-        if (density <= 0.0) {
-            continue;
+    var cloud_depth = 0.0;
+    let clouds_possible = debug_mode() != DEBUG_OFF || u.shape.x > 0.0 || u.horizon.x > 0.0;
+    if (total > 0.0 && clouds_possible) {
+        // Step count grows with the length inside the layer (long horizon paths get more steps).
+        let thickness = u.layer.y - u.layer.x;
+        let n_f = mix(u.march.x, u.march.y, clamp(total / (4.0 * thickness), 0.0, 1.0));
+        let n = max(u32(ceil(n_f)), 1u);
+        // Steps grow with distance on long paths: sample k sits at s = total (k / n)^p, p from 1
+        // (paths up to a layer thick) to 2 (five layers and more), so the cloud around the camera
+        // is resolved finely and the far horizon coarsely. Consecutive positions partition
+        // [0, total] exactly, which keeps Hillaire's per-step integral energy-conserving.
+        let power = 1.0 + clamp((total - thickness) / (4.0 * thickness), 0.0, 1.0);
+
+        // Blue-noise jitter of the sample position inside each step, rotated per frame by the
+        // golden ratio so that temporal accumulation sees fresh offsets.
+        var jitter = 0.5;
+        if (u.march.w > 0.5) {
+            let bn_size = textureDimensions(blue_noise);
+            let bn = textureLoad(blue_noise, id.xy % bn_size, 0).r;
+            jitter = fract(bn + u.tangent_x.w * 0.61803398875);
         }
-        let sigma_t = density * u.shape.z;
-        let tau = sun_optical_depth(p);
-        // Wrenninge 2015 multiple-scattering octaves.
-        var ms = 0.0;
-        var a_i = 1.0;
-        var b_i = 1.0;
-        for (var o = 0u; o < octaves; o++) {
-            ms += b_i * phase_oct[o] * exp(-a_i * tau);
-            a_i *= u.ms.y;
-            b_i *= u.ms.z;
+
+        // Phase per multiple-scattering octave (Wrenninge: eccentricity scaled by c^i).
+        let octaves = u32(u.ms.x);
+        var phase_oct: array<f32, 8>;
+        var c_i = 1.0;
+        for (var i = 0u; i < octaves; i++) {
+            phase_oct[i] = phase_eval(u32(u.misc.y), u.phase, cos_theta, c_i);
+            c_i *= u.ms.w;
         }
-        let hf = clamp((altitude(p, up, radius) - u.layer.x) / thickness, 0.0, 1.0);
-        let ambient = mix(u.ambient_bottom.rgb, u.ambient_top.rgb, hf);
-        let source = u.shape.w * sigma_t * (sun_radiance * ms + ambient);
-        // Hillaire 2016 energy-conserving integration over the step.
-        let step_t = exp(-sigma_t * dt);
-        radiance += transmittance * source * (1.0 - step_t) / sigma_t;
-        depth_weighted += transmittance * (1.0 - step_t) * t;
-        transmittance *= step_t;
-        if (transmittance < u.march.z) {
-            break;
+        var depth_weighted = 0.0;
+        let inv_n = 1.0 / f32(n);
+        for (var i = 0u; i < n; i++) {
+            let s = total * pow((f32(i) + jitter) * inv_n, power);
+            let dt = total * (pow(f32(i + 1u) * inv_n, power) - pow(f32(i) * inv_n, power));
+            let t = select(seg.b.x + (s - len_a), seg.a.x + s, s < len_a);
+            let p = cam + dir * t;
+            let density = sample_density(p, false);
+            if (density <= 0.0) {
+                continue;
+            }
+            let sigma_t = density * u.shape.z;
+            let tau = sun_optical_depth(p);
+            // Wrenninge 2015 multiple-scattering octaves.
+            var ms = 0.0;
+            var a_i = 1.0;
+            var b_i = 1.0;
+            for (var o = 0u; o < octaves; o++) {
+                ms += b_i * phase_oct[o] * exp(-a_i * tau);
+                a_i *= u.ms.y;
+                b_i *= u.ms.z;
+            }
+            let hf = clamp((altitude(p, up, radius) - u.layer.x) / thickness, 0.0, 1.0);
+            let ambient = mix(u.ambient_bottom.rgb, u.ambient_top.rgb, hf);
+            let source = u.shape.w * sigma_t * (sun_radiance * ms + ambient);
+            // Hillaire 2016 energy-conserving integration over the step.
+            let step_t = exp(-sigma_t * dt);
+            radiance += transmittance * source * (1.0 - step_t) / sigma_t;
+            depth_weighted += transmittance * (1.0 - step_t) * t;
+            transmittance *= step_t;
+            if (transmittance < u.march.z) {
+                break;
+            }
+        }
+
+        let opacity = 1.0 - transmittance;
+        if (opacity > 1e-4) {
+            cloud_depth = depth_weighted / opacity;
+            // Aerial perspective: distant clouds take the haze color.
+            let fade = haze_fade(cloud_depth);
+            radiance = radiance * fade + (1.0 - fade) * opacity * u.haze.rgb;
         }
     }
 
-    let opacity = 1.0 - transmittance;
-    var cloud_depth = 0.0;
-    if (opacity > 1e-4) {
-        cloud_depth = depth_weighted / opacity;
-        // Aerial perspective: distant clouds take the haze color.
-        let fade = exp(-max(cloud_depth - u.haze.w, 0.0) * u.misc.x);
-        radiance = radiance * fade + (1.0 - fade) * opacity * u.haze.rgb;
+    // The high layer, in front of or behind the main layer depending on where it is crossed.
+    if (debug_mode() == DEBUG_OFF && u.cirrus.x > 0.0) {
+        let c = cirrus_layer(cam, dir, max_t, cos_theta, sun_radiance);
+        if (c.transmittance < 1.0) {
+            let fade = haze_fade(c.distance);
+            let lc = c.radiance * fade + (1.0 - fade) * (1.0 - c.transmittance) * u.haze.rgb;
+            let in_front = seg.count == 0u || c.distance < seg.a.x;
+            if (in_front) {
+                radiance = lc + c.transmittance * radiance;
+            } else {
+                radiance = radiance + transmittance * lc;
+            }
+            if (cloud_depth == 0.0) {
+                cloud_depth = c.distance;
+            }
+            transmittance *= c.transmittance;
+        }
     }
     textureStore(march_out, id.xy, vec4f(radiance, transmittance));
     textureStore(depth_out, id.xy, vec4f(cloud_depth));

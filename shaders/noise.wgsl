@@ -1,7 +1,7 @@
 // Tileable procedural noise on the unit cube: every function below is periodic with period 1
 // in x, y and z, because lattice and cell indices wrap modulo the frequency.
 
-fn wrap_cell(c: vec3i, period: i32) -> vec3i {
+fn wrap_cell(c: vec3i, period: vec3i) -> vec3i {
     return ((c % period) + period) % period;
 }
 
@@ -28,13 +28,13 @@ fn grad_dot(hash: u32, d: vec3f) -> f32 {
     }
 }
 
-fn lattice_hash(c: vec3i, period: i32, seed: u32) -> u32 {
+fn lattice_hash(c: vec3i, period: vec3i, seed: u32) -> u32 {
     return pcg3d(bitcast<vec3u>(wrap_cell(c, period)) ^ vec3u(seed, seed * 7919u, seed * 104729u)).x;
 }
 
-// Improved Perlin noise with `freq` lattice cells per unit, in [-1, 1] (about).
-fn perlin(p_unit: vec3f, freq: i32, seed: u32) -> f32 {
-    let p = p_unit * f32(freq);
+// Improved Perlin noise with `freq` lattice cells per unit along each axis, in [-1, 1] (about).
+fn perlin3(p_unit: vec3f, freq: vec3i, seed: u32) -> f32 {
+    let p = p_unit * vec3f(freq);
     let i = vec3i(floor(p));
     let f = p - floor(p);
     let u = fade(f);
@@ -50,19 +50,28 @@ fn perlin(p_unit: vec3f, freq: i32, seed: u32) -> f32 {
     return mix(mix(x00, x10, u.y), mix(x01, x11, u.y), u.z);
 }
 
-// Perlin fBM, normalised to [0, 1]; lacunarity 2 keeps every octave tileable.
-fn perlin_fbm(p: vec3f, freq: i32, octaves: i32, persistence: f32, seed: u32) -> f32 {
+fn perlin(p_unit: vec3f, freq: i32, seed: u32) -> f32 {
+    return perlin3(p_unit, vec3i(freq), seed);
+}
+
+// Anisotropic Perlin fBM in [0, 1]: different cell counts per axis (streaks), lacunarity 2.
+fn perlin_fbm3(p: vec3f, freq: vec3i, octaves: i32, persistence: f32, seed: u32) -> f32 {
     var sum = 0.0;
     var amp = 1.0;
     var total = 0.0;
     var f = freq;
     for (var o = 0; o < octaves; o++) {
-        sum += perlin(p, f, seed + u32(o)) * amp;
+        sum += perlin3(p, f, seed + u32(o)) * amp;
         total += amp;
         amp *= persistence;
         f *= 2;
     }
     return clamp(sum / total * 0.5 + 0.5, 0.0, 1.0);
+}
+
+// Perlin fBM, normalised to [0, 1]; lacunarity 2 keeps every octave tileable.
+fn perlin_fbm(p: vec3f, freq: i32, octaves: i32, persistence: f32, seed: u32) -> f32 {
+    return perlin_fbm3(p, vec3i(freq), octaves, persistence, seed);
 }
 
 // Inverted Worley F1 with wrapped cells (one feature point per cell): 1 at feature points,
@@ -75,7 +84,7 @@ fn worley(p_unit: vec3f, freq: i32, seed: u32) -> f32 {
         for (var y = -1; y <= 1; y++) {
             for (var x = -1; x <= 1; x++) {
                 let c = cell + vec3i(x, y, z);
-                let feature = vec3f(c) + hash33(wrap_cell(c, freq), seed);
+                let feature = vec3f(c) + hash33(wrap_cell(c, vec3i(freq)), seed);
                 let d = p - feature;
                 best = min(best, dot(d, d));
             }

@@ -4,10 +4,8 @@
 struct BakeParams {
     seed: u32,
     size: u32,
-    frequency: u32,
-    _pad: u32,
-    // Weather map: mean cloud type, type variation, density variation, unused.
-    weather: vec4f,
+    _pad0: u32,
+    _pad1: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: BakeParams;

@@ -129,7 +129,7 @@ impl DemoView {
     }
 
     /// The frame inputs at time `time`.
-    pub fn frame(&self, width: u32, height: u32, time: f32) -> FrameInputs {
+    pub fn frame(&self, width: u32, height: u32, time: f64) -> FrameInputs {
         FrameInputs {
             camera: self.camera(width, height),
             sun: self.sun,

@@ -8,8 +8,8 @@ pub enum Error {
     /// A field of [`crate::Settings`] is out of range or not finite.
     #[error("invalid setting `{field}`: {reason}")]
     InvalidSettings {
-        /// Path of the offending field, e.g. `layer.bottom_altitude`.
-        field: &'static str,
+        /// Path of the offending field, e.g. `weather.layer.bottom_altitude`.
+        field: String,
         /// Why it was refused.
         reason: String,
     },
@@ -39,6 +39,21 @@ pub enum Error {
         /// The formats that would be accepted.
         supported: &'static str,
     },
+    /// A weather preset file could not be read, parsed or validated.
+    #[error("preset {origin}{}{}: {message}", line.map(|l| format!(", line {l}")).unwrap_or_default(), field.as_ref().map(|f| format!(", field `{f}`")).unwrap_or_default())]
+    PresetFile {
+        /// The file path, or `<string>` for text.
+        origin: String,
+        /// 1-based line of the problem, when known.
+        line: Option<usize>,
+        /// Dotted path of the offending field, when known.
+        field: Option<String>,
+        /// What is wrong.
+        message: String,
+    },
+    /// A weather request is unusable (bad duration, out of time order).
+    #[error("invalid weather request: {0}")]
+    InvalidWeather(String),
     /// `encode` was called before any successful `prepare`.
     #[error("renderer not prepared: call prepare() with the frame inputs before encode()")]
     NotPrepared,
@@ -61,13 +76,6 @@ pub enum Error {
 
 /// Shorthand used throughout the crate.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
-
-pub(crate) fn invalid_setting(field: &'static str, reason: impl Into<String>) -> Error {
-    Error::InvalidSettings {
-        field,
-        reason: reason.into(),
-    }
-}
 
 pub(crate) fn invalid_frame(field: &'static str, reason: impl Into<String>) -> Error {
     Error::InvalidFrame {

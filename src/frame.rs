@@ -75,8 +75,9 @@ pub struct FrameInputs {
     pub camera: Camera,
     /// The sun.
     pub sun: Sun,
-    /// Time in seconds, chosen by the host (it drives the wind; there is no hidden clock).
-    pub time: f32,
+    /// Time in seconds on the host's clock: it drives the wind and weather transitions; there
+    /// is no hidden clock, so the same times give the same sky.
+    pub time: f64,
 }
 
 /// Camera quantities derived once per frame and used by both CPU mirror and shader.
@@ -437,7 +438,7 @@ mod tests {
             })
         ));
         f.sun = Sun::default();
-        f.time = f32::INFINITY;
+        f.time = f64::INFINITY;
         assert!(matches!(
             f.validate(),
             Err(Error::InvalidFrame { field: "time", .. })

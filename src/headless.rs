@@ -353,8 +353,18 @@ impl Headless {
         read_texture(&self.device, &self.queue, texture, mip)
     }
 
-    /// The weather map, RGBA8 (R coverage, G cloud type, B density).
-    pub fn read_weather_map(&self) -> Result<Vec<u8>> {
-        read_texture(&self.device, &self.queue, self.renderer.weather_map(), 0)
+    /// The running transition's (from, to) weather maps, RGBA8: R, G, B coverage of cloud
+    /// layers 1-3, A cirrus.
+    pub fn read_weather_maps(&self) -> Result<(Vec<u8>, Vec<u8>)> {
+        let (from, to) = self.renderer.weather_maps();
+        Ok((
+            read_texture(&self.device, &self.queue, from, 0)?,
+            read_texture(&self.device, &self.queue, to, 0)?,
+        ))
+    }
+
+    /// The renderer.
+    pub fn renderer(&self) -> &Renderer {
+        &self.renderer
     }
 }

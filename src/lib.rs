@@ -30,6 +30,7 @@ pub mod headless;
 pub mod lighting;
 pub mod renderer;
 pub mod settings;
+mod validate;
 pub mod weather;
 
 pub use error::{Error, Result};
@@ -38,6 +39,7 @@ pub use gpu::noise::NoiseVolume;
 pub use headless::Headless;
 pub use renderer::{ColorTargets, Renderer, Targets};
 pub use settings::{DebugDensity, Settings};
+pub use weather::{Preset, Weather};
 pub use wgpu;
 
 /// Crate version, from Cargo.toml.

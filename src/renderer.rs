@@ -12,7 +12,9 @@ use crate::gpu::composite::CompositeCache;
 use crate::gpu::march::{MarchPipeline, MarchUniforms};
 use crate::gpu::noise::{NoiseTextures, NoiseVolume};
 use crate::gpu::shaders::DepthKind;
+use crate::gpu::weather::WeatherMaps;
 use crate::settings::Settings;
+use crate::weather::{Timeline, Weather, WeatherSample};
 
 /// Output formats the composite can render to (blendable ones also work in place).
 pub const OUTPUT_FORMATS: &[wgpu::TextureFormat] = &[
@@ -80,6 +82,9 @@ pub struct Renderer {
     queue: wgpu::Queue,
     settings: Settings,
     noise: NoiseTextures,
+    weather_maps: WeatherMaps,
+    timeline: Timeline,
+    last_time: f64,
     march_depth: MarchPipeline,
     march_r32: MarchPipeline,
     composite: CompositeCache,
@@ -230,7 +235,13 @@ impl Renderer {
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, settings: Settings) -> Result<Self> {
         settings.validate()?;
         gpu_scope(device, || {
-            let noise = NoiseTextures::new(device, queue, &settings.noise, &settings.weather_map);
+            let noise = NoiseTextures::new(device, queue, &settings.noise);
+            let weather_maps = WeatherMaps::new(
+                device,
+                queue,
+                settings.noise.weather_size,
+                &settings.weather,
+            );
             let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("nimbus march uniforms"),
                 size: std::mem::size_of::<MarchUniforms>() as u64,
@@ -259,6 +270,9 @@ impl Renderer {
                 march_depth: MarchPipeline::new(device, DepthKind::Depth),
                 march_r32: MarchPipeline::new(device, DepthKind::R32Float),
                 composite: CompositeCache::default(),
+                timeline: Timeline::new(settings.weather.clone(), 0.0),
+                last_time: 0.0,
+                weather_maps,
                 settings,
                 noise,
                 uniforms,
@@ -275,20 +289,59 @@ impl Renderer {
         &self.settings
     }
 
-    /// Replaces the settings; re-bakes the noise only when its seed, sizes or the weather
-    /// map changed. On error nothing changes.
+    /// Replaces the settings; re-bakes the noise only when its seed or sizes changed. A
+    /// different `settings.weather` takes effect at once (no transition; the wind carries on
+    /// from where it is): use [`Renderer::set_weather`] for a smooth change. On error nothing
+    /// changes.
     pub fn set_settings(&mut self, settings: Settings) -> Result<()> {
         settings.validate()?;
-        if settings.noise != self.settings.noise
-            || settings.weather_map != self.settings.weather_map
-        {
-            let (device, queue) = (&self.device, &self.queue);
-            self.noise = gpu_scope(device, || {
-                NoiseTextures::new(device, queue, &settings.noise, &settings.weather_map)
-            })?;
-        }
+        let (device, queue) = (self.device.clone(), self.queue.clone());
+        let noise_changed = settings.noise != self.settings.noise;
+        let map_size_changed = settings.noise.weather_size != self.settings.noise.weather_size;
+        let weather_changed = settings.weather != self.settings.weather;
+        gpu_scope(&device, || {
+            if noise_changed {
+                self.noise = NoiseTextures::new(&device, &queue, &settings.noise);
+            }
+            if map_size_changed {
+                self.weather_maps = WeatherMaps::new(
+                    &device,
+                    &queue,
+                    settings.noise.weather_size,
+                    &settings.weather,
+                );
+            } else if weather_changed {
+                self.weather_maps.reset(&device, &queue, &settings.weather);
+            }
+            if weather_changed || map_size_changed {
+                self.timeline
+                    .replace(settings.weather.clone(), self.last_time);
+            }
+        })?;
         self.settings = settings;
         Ok(())
+    }
+
+    /// Starts a transition to `weather`, beginning at host time `start` (seconds, the clock of
+    /// [`FrameInputs::time`]) and lasting `duration` seconds (0 = at once). If a transition is
+    /// running, its current blend is baked into a texture and becomes the starting point, so
+    /// the sky never jumps. Requests must come in time order. Submits its own small GPU work
+    /// (map generation and the bake) on the queue. On error nothing changes.
+    pub fn set_weather(&mut self, weather: Weather, start: f64, duration: f64) -> Result<()> {
+        weather.validate()?;
+        let mut timeline = self.timeline.clone();
+        let action = timeline.request(weather.clone(), start, duration)?;
+        let (device, queue) = (self.device.clone(), self.queue.clone());
+        gpu_scope(&device, || {
+            self.weather_maps.apply(&device, &queue, action, &weather)
+        })?;
+        self.timeline = timeline;
+        Ok(())
+    }
+
+    /// The weather at host time `time`: blended scalars, map weight and wind displacement.
+    pub fn weather_at(&self, time: f64) -> WeatherSample {
+        self.timeline.sample(time)
     }
 
     /// Validates the frame inputs and computes this frame's uniforms. On error the previous
@@ -296,8 +349,11 @@ impl Renderer {
     pub fn prepare(&mut self, frame: &FrameInputs) -> Result<()> {
         self.pending = None;
         let (camera, sun_dir) = frame.validate()?;
+        let sample = self.timeline.sample(frame.time);
+        self.last_time = frame.time;
         self.pending = Some(MarchUniforms::new(
             &self.settings,
+            &sample,
             frame,
             &camera,
             sun_dir,
@@ -331,6 +387,7 @@ impl Renderer {
                 encoder,
                 &self.uniforms,
                 &self.noise,
+                self.weather_maps.views(),
                 targets.depth.unwrap_or(&self.no_depth),
                 &sized.march_view,
                 &sized.cloud_depth_view,
@@ -396,8 +453,9 @@ impl Renderer {
         self.noise.volume(which)
     }
 
-    pub(crate) fn weather_map(&self) -> &wgpu::Texture {
-        &self.noise.weather
+    /// The (from, to) weather maps of the running transition.
+    pub(crate) fn weather_maps(&self) -> (&wgpu::Texture, &wgpu::Texture) {
+        self.weather_maps.textures()
     }
 
     /// The march result of the last frame: RGBA16F with rgb = L, a = T; and the cloud depth.

@@ -3,32 +3,29 @@
 //! Units: meters, radians, linear RGB. Every field documents its default.
 //! [`Settings::validate`] refuses anything non-finite or out of range with the field's path.
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
-use crate::error::{invalid_setting, Result};
+use crate::error::Result;
 use crate::lighting::phase::PhaseModel;
+use crate::validate::{color, count, finite, in_range, invalid, non_negative, positive, pow2};
+use crate::weather::preset::Weather;
 
 /// Everything that defines how the clouds look and how they are rendered.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Settings {
     /// Planet geometry and world orientation.
     pub planet: Planet,
-    /// Altitudes of the cloud shell.
-    pub layer: CloudLayer,
-    /// Density model (Schneider, as described in the Aetherius thesis).
-    pub clouds: CloudShape,
-    /// The 2D weather map generator.
-    pub weather_map: WeatherMap,
-    /// Sizes and seed of the baked noise volumes.
+    /// The weather at start (a built-in preset or one loaded from a file). Change it later with
+    /// `Renderer::set_weather` for a smooth transition.
+    pub weather: Weather,
+    /// Sizes, seed and world scale of the baked noise.
     pub noise: NoiseSettings,
-    /// Phase function, multiple scattering, ambient light.
+    /// Phase function, multiple scattering, light march.
     pub lighting: Lighting,
     /// Ray-march budget.
     pub march: March,
     /// Aerial-perspective haze that distant clouds fade into.
     pub haze: Haze,
-    /// Wind moving the weather map and the noise.
-    pub wind: Wind,
     /// Replaces the noise model by an analytic medium (for checking the integrator).
     pub debug_density: DebugDensity,
 }
@@ -43,58 +40,7 @@ pub struct Planet {
     pub up: Vec3,
 }
 
-/// The cloud shell: two spheres concentric with the planet.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CloudLayer {
-    /// Altitude of the cloud bases in meters. Default 1 500.
-    pub bottom_altitude: f32,
-    /// Altitude of the highest cloud tops in meters. Default 4 500.
-    pub top_altitude: f32,
-}
-
-/// The density model's knobs.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CloudShape {
-    /// Global coverage in [0, 1], multiplied with the weather map's coverage. 0 = clear sky.
-    /// Default 0.45.
-    pub coverage: f32,
-    /// Global density multiplier, >= 0. Default 1.
-    pub density: f32,
-    /// Extinction coefficient σt (1/m) of density 1. Default 0.04 (cumulus: 0.02–0.1).
-    pub extinction: f32,
-    /// Single-scattering albedo σs/σt in [0, 1]. Default 0.99 (water droplets barely absorb).
-    pub albedo: f32,
-    /// Size in meters of one tile of the base-shape volume. Default 14 000.
-    pub base_scale: f32,
-    /// Size in meters of one tile of the detail volume. Default 1 800.
-    pub detail_scale: f32,
-    /// How deeply detail noise erodes the base shape, in [0, 1]. Default 0.35
-    /// (the Aetherius default before coverage attenuation).
-    pub detail_strength: f32,
-    /// Fraction of the layer thickness over which density fades in at the bottom and out at
-    /// the top of the whole shell, in [0, 0.5]. Default 0.1.
-    pub layer_softness: f32,
-}
-
-/// Parameters of the procedural 2D weather map (R coverage, G cloud type, B density).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct WeatherMap {
-    /// Seed of the weather map noise. Default 7.
-    pub seed: u32,
-    /// Size in meters of one (tileable) weather-map tile. Default 60 000.
-    pub extent: f32,
-    /// Number of cloud cells across one tile (base frequency of the noise), >= 1. Default 10.
-    pub frequency: u32,
-    /// Mean cloud type in [0, 1]: 0 stratus, 1/3 stratocumulus, 2/3 cumulus, 1 cumulonimbus.
-    /// Default 0.62.
-    pub cloud_type: f32,
-    /// How much the cloud type varies across the map, in [0, 1]. Default 0.25.
-    pub type_variation: f32,
-    /// How much the local density varies across the map, in [0, 1]. Default 0.3.
-    pub density_variation: f32,
-}
-
-/// Sizes and seed of the baked noise.
+/// Sizes, seed and world scale of the baked noise (the same for every weather).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct NoiseSettings {
     /// Seed of the base and detail volumes and of the blue noise. Default 1.
@@ -103,10 +49,16 @@ pub struct NoiseSettings {
     pub base_size: u32,
     /// Edge of the detail volume (RGBA8), a power of two in [8, 128]. Default 32.
     pub detail_size: u32,
-    /// Edge of the weather map, a power of two in [16, 2048]. Default 512.
+    /// Edge of the weather maps, a power of two in [16, 2048]. Default 512.
     pub weather_size: u32,
     /// Edge of the blue-noise jitter texture, a power of two in [8, 128]. Default 64.
     pub blue_noise_size: u32,
+    /// Size in meters of one tile of the base-shape volume. Default 14 000.
+    pub base_scale: f32,
+    /// Size in meters of one tile of the detail volume. Default 1 800.
+    pub detail_scale: f32,
+    /// Size in meters of one (tileable) weather-map tile. Default 60 000.
+    pub weather_extent: f32,
 }
 
 /// Wrenninge 2015 multiple-scattering octaves: octave i scatters `b^i` as much light, through
@@ -130,11 +82,6 @@ pub struct Lighting {
     pub phase: PhaseModel,
     /// Multiple-scattering approximation.
     pub multiple_scattering: MultipleScattering,
-    /// Ambient radiance (linear RGB, same units as sun illuminance × 1/sr) at the top of the
-    /// layer. Default a bright blue-white sky.
-    pub ambient_top: Vec3,
-    /// Ambient radiance at the bottom of the layer. Default a dimmer grey-blue.
-    pub ambient_bottom: Vec3,
     /// Number of light-march samples toward the sun, in [1, 32]. Default 6.
     pub light_steps: u32,
     /// Length in meters the light march covers (clipped to the shell). Default 3 000.
@@ -166,15 +113,6 @@ pub struct Haze {
     /// e-folding distance of the fade beyond the start, meters; `f32::INFINITY` disables
     /// the haze. Default 40 000.
     pub fade_distance: f32,
-}
-
-/// Wind, in world units.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Wind {
-    /// Horizontal direction (x, z in world space with +Y up; normalised on use). Default (1, 0).
-    pub direction: Vec2,
-    /// Speed in m/s (>= 0). Default 10.
-    pub speed: f32,
 }
 
 /// Analytic media replacing the noise model, so the integrator can be checked against
@@ -212,43 +150,6 @@ impl Default for Planet {
     }
 }
 
-impl Default for CloudLayer {
-    fn default() -> Self {
-        Self {
-            bottom_altitude: 1_500.0,
-            top_altitude: 4_500.0,
-        }
-    }
-}
-
-impl Default for CloudShape {
-    fn default() -> Self {
-        Self {
-            coverage: 0.45,
-            density: 1.0,
-            extinction: 0.04,
-            albedo: 0.99,
-            base_scale: 14_000.0,
-            detail_scale: 1_800.0,
-            detail_strength: 0.35,
-            layer_softness: 0.1,
-        }
-    }
-}
-
-impl Default for WeatherMap {
-    fn default() -> Self {
-        Self {
-            seed: 7,
-            extent: 60_000.0,
-            frequency: 10,
-            cloud_type: 0.62,
-            type_variation: 0.25,
-            density_variation: 0.3,
-        }
-    }
-}
-
 impl Default for NoiseSettings {
     fn default() -> Self {
         Self {
@@ -257,6 +158,9 @@ impl Default for NoiseSettings {
             detail_size: 32,
             weather_size: 512,
             blue_noise_size: 64,
+            base_scale: 14_000.0,
+            detail_scale: 1_800.0,
+            weather_extent: 60_000.0,
         }
     }
 }
@@ -277,8 +181,6 @@ impl Default for Lighting {
         Self {
             phase: PhaseModel::default(),
             multiple_scattering: MultipleScattering::default(),
-            ambient_top: Vec3::new(0.55, 0.65, 0.85) * 0.35,
-            ambient_bottom: Vec3::new(0.45, 0.5, 0.6) * 0.12,
             light_steps: 6,
             light_distance: 3_000.0,
         }
@@ -307,100 +209,17 @@ impl Default for Haze {
     }
 }
 
-impl Default for Wind {
-    fn default() -> Self {
-        Self {
-            direction: Vec2::X,
-            speed: 10.0,
-        }
-    }
-}
-
 impl Default for Settings {
     fn default() -> Self {
         Self {
             planet: Planet::default(),
-            layer: CloudLayer::default(),
-            clouds: CloudShape::default(),
-            weather_map: WeatherMap::default(),
+            weather: Weather::default(),
             noise: NoiseSettings::default(),
             lighting: Lighting::default(),
             march: March::default(),
             haze: Haze::default(),
-            wind: Wind::default(),
             debug_density: DebugDensity::Off,
         }
-    }
-}
-
-fn finite(field: &'static str, v: f32) -> Result<()> {
-    if v.is_finite() {
-        Ok(())
-    } else {
-        Err(invalid_setting(field, format!("must be finite, got {v}")))
-    }
-}
-
-fn in_range(field: &'static str, v: f32, lo: f32, hi: f32) -> Result<()> {
-    finite(field, v)?;
-    if (lo..=hi).contains(&v) {
-        Ok(())
-    } else {
-        Err(invalid_setting(
-            field,
-            format!("must be in [{lo}, {hi}], got {v}"),
-        ))
-    }
-}
-
-fn positive(field: &'static str, v: f32) -> Result<()> {
-    finite(field, v)?;
-    if v > 0.0 {
-        Ok(())
-    } else {
-        Err(invalid_setting(field, format!("must be > 0, got {v}")))
-    }
-}
-
-fn non_negative(field: &'static str, v: f32) -> Result<()> {
-    finite(field, v)?;
-    if v >= 0.0 {
-        Ok(())
-    } else {
-        Err(invalid_setting(field, format!("must be >= 0, got {v}")))
-    }
-}
-
-fn color(field: &'static str, c: Vec3) -> Result<()> {
-    if c.is_finite() && c.min_element() >= 0.0 {
-        Ok(())
-    } else {
-        Err(invalid_setting(
-            field,
-            format!("must be finite and non-negative, got {c}"),
-        ))
-    }
-}
-
-fn pow2(field: &'static str, v: u32, lo: u32, hi: u32) -> Result<()> {
-    if v.is_power_of_two() && (lo..=hi).contains(&v) {
-        Ok(())
-    } else {
-        Err(invalid_setting(
-            field,
-            format!("must be a power of two in [{lo}, {hi}], got {v}"),
-        ))
-    }
-}
-
-fn count(field: &'static str, v: u32, lo: u32, hi: u32) -> Result<()> {
-    if (lo..=hi).contains(&v) {
-        Ok(())
-    } else {
-        Err(invalid_setting(
-            field,
-            format!("must be in [{lo}, {hi}], got {v}"),
-        ))
     }
 }
 
@@ -409,48 +228,25 @@ impl Settings {
     pub fn validate(&self) -> Result<()> {
         positive("planet.radius", self.planet.radius)?;
         if !self.planet.up.is_finite() || self.planet.up.length() < 1e-6 {
-            return Err(invalid_setting(
+            return Err(invalid(
                 "planet.up",
                 format!("must be a finite non-zero vector, got {}", self.planet.up),
             ));
         }
-        let layer = &self.layer;
-        non_negative("layer.bottom_altitude", layer.bottom_altitude)?;
-        positive("layer.top_altitude", layer.top_altitude)?;
-        if layer.bottom_altitude >= layer.top_altitude {
-            return Err(invalid_setting(
-                "layer.bottom_altitude",
-                format!(
-                    "must be below layer.top_altitude ({} >= {})",
-                    layer.bottom_altitude, layer.top_altitude
-                ),
-            ));
-        }
-        let c = &self.clouds;
-        in_range("clouds.coverage", c.coverage, 0.0, 1.0)?;
-        non_negative("clouds.density", c.density)?;
-        positive("clouds.extinction", c.extinction)?;
-        in_range("clouds.albedo", c.albedo, 0.0, 1.0)?;
-        positive("clouds.base_scale", c.base_scale)?;
-        positive("clouds.detail_scale", c.detail_scale)?;
-        in_range("clouds.detail_strength", c.detail_strength, 0.0, 1.0)?;
-        in_range("clouds.layer_softness", c.layer_softness, 0.0, 0.5)?;
-        let w = &self.weather_map;
-        positive("weather_map.extent", w.extent)?;
-        count("weather_map.frequency", w.frequency, 1, 64)?;
-        in_range("weather_map.cloud_type", w.cloud_type, 0.0, 1.0)?;
-        in_range("weather_map.type_variation", w.type_variation, 0.0, 1.0)?;
-        in_range(
-            "weather_map.density_variation",
-            w.density_variation,
-            0.0,
-            1.0,
-        )?;
+        self.weather.validate().map_err(|e| match e {
+            crate::Error::InvalidSettings { field, reason } => {
+                invalid(format!("weather.{field}"), reason)
+            }
+            other => other,
+        })?;
         let n = &self.noise;
         pow2("noise.base_size", n.base_size, 8, 256)?;
         pow2("noise.detail_size", n.detail_size, 8, 128)?;
         pow2("noise.weather_size", n.weather_size, 16, 2048)?;
         pow2("noise.blue_noise_size", n.blue_noise_size, 8, 128)?;
+        positive("noise.base_scale", n.base_scale)?;
+        positive("noise.detail_scale", n.detail_scale)?;
+        positive("noise.weather_extent", n.weather_extent)?;
         let l = &self.lighting;
         l.phase.validate()?;
         let ms = &l.multiple_scattering;
@@ -473,8 +269,6 @@ impl Settings {
             0.0,
             1.0,
         )?;
-        color("lighting.ambient_top", l.ambient_top)?;
-        color("lighting.ambient_bottom", l.ambient_bottom)?;
         count("lighting.light_steps", l.light_steps, 1, 32)?;
         positive("lighting.light_distance", l.light_distance)?;
         let m = &self.march;
@@ -491,18 +285,11 @@ impl Settings {
         color("haze.color", h.color)?;
         non_negative("haze.start_distance", h.start_distance)?;
         if h.fade_distance.is_nan() || h.fade_distance <= 0.0 {
-            return Err(invalid_setting(
+            return Err(invalid(
                 "haze.fade_distance",
                 format!("must be > 0 (or infinity), got {}", h.fade_distance),
             ));
         }
-        if !self.wind.direction.is_finite() {
-            return Err(invalid_setting(
-                "wind.direction",
-                format!("must be finite, got {}", self.wind.direction),
-            ));
-        }
-        non_negative("wind.speed", self.wind.speed)?;
         match self.debug_density {
             DebugDensity::Off => {}
             DebugDensity::Slab {
@@ -513,7 +300,7 @@ impl Settings {
                 finite("debug_density.bottom_altitude", bottom_altitude)?;
                 finite("debug_density.top_altitude", top_altitude)?;
                 if bottom_altitude >= top_altitude {
-                    return Err(invalid_setting(
+                    return Err(invalid(
                         "debug_density.bottom_altitude",
                         "must be below debug_density.top_altitude",
                     ));
@@ -526,7 +313,7 @@ impl Settings {
                 density,
             } => {
                 if !center.is_finite() {
-                    return Err(invalid_setting("debug_density.center", "must be finite"));
+                    return Err(invalid("debug_density.center", "must be finite"));
                 }
                 positive("debug_density.radius", radius)?;
                 non_negative("debug_density.density", density)?;
@@ -541,7 +328,7 @@ mod tests {
     use super::*;
     use crate::Error;
 
-    fn refused(s: &Settings) -> &'static str {
+    fn refused(s: &Settings) -> String {
         match s.validate() {
             Err(Error::InvalidSettings { field, .. }) => field,
             other => panic!("expected InvalidSettings, got {other:?}"),
@@ -556,8 +343,8 @@ mod tests {
     #[test]
     fn bottom_above_top_is_refused() {
         let mut s = Settings::default();
-        s.layer.bottom_altitude = 5_000.0;
-        assert_eq!(refused(&s), "layer.bottom_altitude");
+        s.weather.layer.bottom_altitude = 5_000.0;
+        assert_eq!(refused(&s), "weather.layer.bottom_altitude");
         let msg = s.validate().unwrap_err().to_string();
         assert!(msg.contains("top_altitude"), "{msg}");
     }
@@ -570,13 +357,13 @@ mod tests {
         s.planet.radius = f32::NAN;
         assert_eq!(refused(&s), "planet.radius");
         let mut s = Settings::default();
-        s.clouds.density = -0.5;
-        assert_eq!(refused(&s), "clouds.density");
-        s.clouds.density = f32::NAN;
-        assert_eq!(refused(&s), "clouds.density");
+        s.weather.clouds.density = -0.5;
+        assert_eq!(refused(&s), "weather.clouds.density");
+        s.weather.clouds.density = f32::NAN;
+        assert_eq!(refused(&s), "weather.clouds.density");
         let mut s = Settings::default();
-        s.clouds.extinction = f32::INFINITY;
-        assert_eq!(refused(&s), "clouds.extinction");
+        s.weather.clouds.extinction = f32::INFINITY;
+        assert_eq!(refused(&s), "weather.clouds.extinction");
         let s = Settings {
             debug_density: DebugDensity::Sphere {
                 center: Vec3::ZERO,

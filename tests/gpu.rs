@@ -5,53 +5,20 @@ use glam::{Mat4, Vec3, Vec4};
 use nimbus::demo::{standard_views, DemoView, Occluder};
 use nimbus::lighting::phase::PhaseModel;
 use nimbus::lighting::scattering::slab_single_scattering;
-use nimbus::settings::{MultipleScattering, NoiseSettings};
+use nimbus::settings::MultipleScattering;
 use nimbus::{
     Camera, ColorTargets, DebugDensity, DepthConvention, Error, FrameInputs, Headless, NoiseVolume,
     Renderer, Settings, Sun, Targets,
 };
 
-const W: u32 = 160;
-const H: u32 = 90;
-
-fn setup() {
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        let dir = std::env::temp_dir().join(format!("nimbus-xdg-{}", std::process::id()));
-        let _ = std::fs::create_dir_all(&dir);
-        std::env::set_var("XDG_RUNTIME_DIR", dir);
-    }
-}
-
-fn headless(settings: Settings) -> Headless {
-    setup();
-    let mut h = Headless::new(settings).expect("a Vulkan adapter (install mesa-vulkan-drivers)");
-    h.resize(W, H).unwrap();
-    h
-}
-
-/// Small noise volumes keep the tests quick on software Vulkan.
-fn small_noise(seed: u32) -> Settings {
-    Settings {
-        noise: NoiseSettings {
-            seed,
-            base_size: 32,
-            detail_size: 16,
-            weather_size: 128,
-            blue_noise_size: 16,
-        },
-        ..Settings::default()
-    }
-}
+mod common;
+use common::{f16, headless, setup, small_noise, H, W};
 
 fn render_view(h: &mut Headless, view: &DemoView) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
     let scene = view.scene(W, H);
     h.upload_scene(&scene.color, Some(&scene.depth)).unwrap();
     h.render(&view.frame(W, H, 0.0)).unwrap();
     (scene.color, h.read_output().unwrap())
-}
-
-fn f16(v: f32) -> f32 {
-    half::f16::from_f32(v).to_f32()
 }
 
 // ---- noise ---------------------------------------------------------------------------------
@@ -109,7 +76,7 @@ fn noise_volumes_tile_across_opposite_faces() {
 fn weather_map_tiles() {
     let h = headless(Settings::default());
     let n = Settings::default().noise.weather_size as usize;
-    let v = h.read_weather_map().unwrap();
+    let (v, _) = h.read_weather_maps().unwrap();
     let px = |x: usize, y: usize, c: usize| v[(y * n + x) * 4 + c] as f64;
     let (mut wrap, mut inner) = (0.0, 0.0);
     for i in 0..n {
@@ -183,7 +150,7 @@ fn mip_levels_average_the_level_below() {
 #[test]
 fn clear_sky_leaves_the_scene_untouched() {
     let mut settings = small_noise(1);
-    settings.clouds.coverage = 0.0;
+    settings.weather.clouds.coverage = 0.0;
     let mut h = headless(settings);
     for view in standard_views() {
         let (scene, out) = render_view(&mut h, &view);
@@ -236,7 +203,7 @@ fn snapshot_views_have_no_nan_or_inf_and_show_clouds() {
 #[test]
 fn pixels_nearer_than_the_clouds_are_unchanged() {
     let mut settings = small_noise(1);
-    settings.clouds.coverage = 1.0; // clouds everywhere above the wall
+    settings.weather.clouds.coverage = 1.0; // clouds everywhere above the wall
     let mut h = headless(settings);
     let mut view = standard_views()[0];
     // A wall 400 m away, below the cloud base, covering the lower 60% of the image.
@@ -340,14 +307,14 @@ fn homogeneous_slab_matches_closed_form_single_scattering() {
         top_altitude: top,
         density: 1.0,
     };
-    settings.clouds.extinction = extinction;
-    settings.clouds.albedo = 1.0;
+    settings.weather.clouds.extinction = extinction;
+    settings.weather.clouds.albedo = 1.0;
     settings.lighting.multiple_scattering = MultipleScattering {
         octaves: 1,
         ..Default::default()
     };
-    settings.lighting.ambient_top = Vec3::ZERO;
-    settings.lighting.ambient_bottom = Vec3::ZERO;
+    settings.weather.ambient_top = Vec3::ZERO;
+    settings.weather.ambient_bottom = Vec3::ZERO;
     settings.lighting.light_distance = 100_000.0;
     settings.haze.fade_distance = f32::INFINITY;
     settings.march.min_steps = 256;
@@ -415,7 +382,7 @@ fn homogeneous_sphere_is_round_and_transmits_by_beer_lambert() {
         radius: 500.0,
         density: 1.0,
     };
-    settings.clouds.extinction = 0.002;
+    settings.weather.clouds.extinction = 0.002;
     settings.march.min_steps = 128;
     settings.march.max_steps = 128;
     settings.march.transmittance_cutoff = 0.0;
@@ -447,7 +414,7 @@ fn homogeneous_sphere_is_round_and_transmits_by_beer_lambert() {
 fn bad_settings_and_frames_are_errors() {
     setup();
     let mut bad = Settings::default();
-    bad.layer.bottom_altitude = 9_000.0;
+    bad.weather.layer.bottom_altitude = 9_000.0;
     assert!(matches!(
         Headless::new(bad),
         Err(Error::InvalidSettings { .. })
@@ -465,9 +432,15 @@ fn bad_settings_and_frames_are_errors() {
     h.render(&view.frame(W, H, 0.0)).unwrap();
     // Bad settings at runtime leave the old ones in place.
     let mut s = small_noise(1);
-    s.clouds.density = f32::NAN;
+    s.weather.clouds.density = f32::NAN;
     assert!(h.renderer_mut().set_settings(s).is_err());
-    assert!(h.renderer_mut().settings().clouds.density.is_finite());
+    assert!(h
+        .renderer_mut()
+        .settings()
+        .weather
+        .clouds
+        .density
+        .is_finite());
 }
 
 #[test]

@@ -2,12 +2,13 @@
 //! per-frame dispatch writing radiance + transmittance and cloud depth.
 
 use bytemuck::{Pod, Zeroable};
-use glam::{Mat4, Vec3};
+use glam::{DVec2, Mat4, Vec3};
 
 use super::noise::NoiseTextures;
 use super::shaders::{pass_source, DepthKind};
 use crate::frame::{CameraDerived, FrameInputs};
 use crate::settings::{DebugDensity, Settings};
+use crate::weather::WeatherSample;
 
 /// Layout must match `MarchUniforms` in shaders/march.wgsl field for field.
 #[repr(C)]
@@ -34,6 +35,10 @@ pub(crate) struct MarchUniforms {
     debug_sphere: [f32; 4],
     tangent_x: [f32; 4],
     tangent_z: [f32; 4],
+    layer_types: [f32; 4],
+    horizon: [f32; 4],
+    cirrus: [f32; 4],
+    skew: [f32; 4],
 }
 
 /// Two horizontal axes perpendicular to `up` (X and Z for +Y up).
@@ -43,21 +48,20 @@ pub(crate) fn tangent_basis(up: Vec3) -> (Vec3, Vec3) {
     (up.cross(tz), tz)
 }
 
-/// Wind offset after `time` seconds, wrapped to one tile so f32 keeps its precision forever.
-fn wind_offset(settings: &Settings, time: f32, tile: f32) -> [f32; 2] {
-    let dir = settings.wind.direction.normalize_or_zero().as_dvec2();
-    let travel = dir * (settings.wind.speed as f64 * time as f64);
-    // Sample at p - travel so features move with the wind.
+/// A wind displacement wrapped to one tile, so f32 keeps its precision forever. Textures are
+/// sampled at p - displacement, so cloud features travel along the wind.
+fn wrapped(offset: DVec2, tile: f32) -> [f32; 2] {
     let t = tile as f64;
     [
-        (-travel.x).rem_euclid(t) as f32,
-        (-travel.y).rem_euclid(t) as f32,
+        (-offset.x).rem_euclid(t) as f32,
+        (-offset.y).rem_euclid(t) as f32,
     ]
 }
 
 impl MarchUniforms {
     pub(crate) fn new(
         settings: &Settings,
+        sample: &WeatherSample,
         frame: &FrameInputs,
         cam: &CameraDerived,
         sun_dir: Vec3,
@@ -85,9 +89,18 @@ impl MarchUniforms {
                 center.extend(radius).to_array(),
             ),
         };
-        let weather_off = wind_offset(s, frame.time, s.weather_map.extent);
-        let base_off = wind_offset(s, frame.time, s.clouds.base_scale);
-        let detail_off = wind_offset(s, frame.time, s.clouds.detail_scale);
+        let w = &sample.weather;
+        let n = &s.noise;
+        let weather_off = wrapped(sample.offsets.weather, n.weather_extent);
+        let base_off = wrapped(sample.offsets.base, n.base_scale);
+        let detail_off = wrapped(sample.offsets.detail, n.detail_scale);
+        let wind_dir = w.wind.direction.normalize_or_zero();
+        let skew = (tx * wind_dir.x + tz * wind_dir.y) * w.wind.skew;
+        let mut types = [0.0f32; 4];
+        for (i, l) in w.map.layers.iter().take(3).enumerate() {
+            types[i] = l.cloud_type;
+        }
+        types[3] = sample.map_weight;
         let inv_fade = if s.haze.fade_distance.is_finite() {
             1.0 / s.haze.fade_distance
         } else {
@@ -102,22 +115,22 @@ impl MarchUniforms {
             sun: v4(sun_dir, frame.sun.illuminance),
             sun_color: v4(frame.sun.color, depth.far_value()),
             layer: [
-                s.layer.bottom_altitude,
-                s.layer.top_altitude,
-                s.clouds.layer_softness,
+                w.layer.bottom_altitude,
+                w.layer.top_altitude,
+                w.clouds.layer_softness,
                 s.march.max_distance,
             ],
             shape: [
-                s.clouds.coverage,
-                s.clouds.density,
-                s.clouds.extinction,
-                s.clouds.albedo,
+                w.clouds.coverage,
+                w.clouds.density,
+                w.clouds.extinction,
+                w.clouds.albedo,
             ],
             scales: [
-                1.0 / s.clouds.base_scale,
-                1.0 / s.clouds.detail_scale,
-                1.0 / s.weather_map.extent,
-                s.clouds.detail_strength,
+                1.0 / n.base_scale,
+                1.0 / n.detail_scale,
+                1.0 / n.weather_extent,
+                w.clouds.detail_strength,
             ],
             wind: [weather_off[0], weather_off[1], base_off[0], base_off[1]],
             wind_detail: [detail_off[0], detail_off[1], 0.0, 0.0],
@@ -131,8 +144,8 @@ impl MarchUniforms {
                     m.eccentricity,
                 ]
             },
-            ambient_top: v4(s.lighting.ambient_top, s.lighting.light_distance),
-            ambient_bottom: v4(s.lighting.ambient_bottom, s.lighting.light_steps as f32),
+            ambient_top: v4(w.ambient_top, s.lighting.light_distance),
+            ambient_bottom: v4(w.ambient_bottom, s.lighting.light_steps as f32),
             march: [
                 s.march.min_steps as f32,
                 s.march.max_steps as f32,
@@ -150,6 +163,20 @@ impl MarchUniforms {
             debug_sphere: sphere,
             tangent_x: v4(tx, (frame_index % 1024) as f32),
             tangent_z: v4(tz, 0.0),
+            layer_types: types,
+            horizon: [
+                w.horizon.strength,
+                w.horizon.start_distance,
+                w.horizon.coverage,
+                w.horizon.cloud_type,
+            ],
+            cirrus: [
+                w.high_layer.coverage,
+                w.high_layer.altitude,
+                w.high_layer.optical_depth,
+                0.0,
+            ],
+            skew: v4(skew, 0.0),
         }
     }
 }
@@ -233,6 +260,7 @@ impl MarchPipeline {
                 texture_entry(6, depth_type, D::D2),
                 storage_entry(7, wgpu::TextureFormat::Rgba16Float),
                 storage_entry(8, wgpu::TextureFormat::R32Float),
+                texture_entry(9, filterable, D::D2),
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -263,6 +291,7 @@ impl MarchPipeline {
         encoder: &mut wgpu::CommandEncoder,
         uniforms: &wgpu::Buffer,
         noise: &NoiseTextures,
+        weather: (&wgpu::TextureView, &wgpu::TextureView),
         scene_depth: &wgpu::TextureView,
         march_out: &wgpu::TextureView,
         depth_out: &wgpu::TextureView,
@@ -282,7 +311,7 @@ impl MarchPipeline {
                 },
                 tex(1, &noise.base_view),
                 tex(2, &noise.detail_view),
-                tex(3, &noise.weather_view),
+                tex(3, weather.0),
                 tex(4, &noise.blue_noise_view),
                 wgpu::BindGroupEntry {
                     binding: 5,
@@ -291,6 +320,7 @@ impl MarchPipeline {
                 tex(6, scene_depth),
                 tex(7, march_out),
                 tex(8, depth_out),
+                tex(9, weather.1),
             ],
         });
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -309,12 +339,12 @@ mod tests {
 
     #[test]
     fn uniforms_match_the_wgsl_struct_size() {
-        // 1 mat4 + 20 vec4 in shaders/march.wgsl.
-        assert_eq!(std::mem::size_of::<MarchUniforms>(), 64 + 20 * 16);
+        // 1 mat4 + 24 vec4 in shaders/march.wgsl.
+        assert_eq!(std::mem::size_of::<MarchUniforms>(), 64 + 24 * 16);
         let src = pass_source("march", DepthKind::Depth);
         let start = src.find("struct MarchUniforms").unwrap();
         let body = &src[start..start + src[start..].find('}').unwrap()];
-        assert_eq!(body.matches(": vec4f").count(), 20);
+        assert_eq!(body.matches(": vec4f").count(), 24);
         assert_eq!(body.matches(": mat4x4f").count(), 1);
     }
 

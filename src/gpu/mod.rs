@@ -3,7 +3,9 @@
 
 pub(crate) mod blue_noise;
 pub(crate) mod composite;
+pub(crate) mod compute;
 pub(crate) mod march;
 pub mod noise;
 pub(crate) mod readback;
 pub(crate) mod shaders;
+pub(crate) mod weather;

@@ -1,21 +1,19 @@
-//! The noise textures Nimbus owns: base-shape and detail volumes (with mips), the weather
-//! map and the blue noise. Baked by compute passes at init and when their settings change.
+//! The noise textures Nimbus owns: base-shape and detail volumes (with mips) and the blue
+//! noise. Baked by compute passes at init and when their settings change.
 
 use bytemuck::{Pod, Zeroable};
 use wgpu::util::DeviceExt;
 
 use super::blue_noise;
-use super::shaders::{pass_source, DepthKind};
-use crate::settings::{NoiseSettings, WeatherMap};
+use super::compute::{compute_pipeline, dispatch};
+use crate::settings::NoiseSettings;
 
 #[repr(C)]
 #[derive(Clone, Copy, Pod, Zeroable)]
 struct BakeParams {
     seed: u32,
     size: u32,
-    frequency: u32,
-    _pad: u32,
-    weather: [f32; 4],
+    _pad: [u32; 2],
 }
 
 /// Which baked volume (for readback and inspection).
@@ -30,10 +28,8 @@ pub enum NoiseVolume {
 pub(crate) struct NoiseTextures {
     pub base: wgpu::Texture,
     pub detail: wgpu::Texture,
-    pub weather: wgpu::Texture,
     pub base_view: wgpu::TextureView,
     pub detail_view: wgpu::TextureView,
-    pub weather_view: wgpu::TextureView,
     pub blue_noise_view: wgpu::TextureView,
     pub sampler: wgpu::Sampler,
 }
@@ -69,110 +65,28 @@ fn mip_view(texture: &wgpu::Texture, mip: u32) -> wgpu::TextureView {
     })
 }
 
-fn compute_pipeline(device: &wgpu::Device, pass: &str, entry: &str) -> wgpu::ComputePipeline {
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(pass),
-        source: wgpu::ShaderSource::Wgsl(pass_source(pass, DepthKind::Depth).into()),
-    });
-    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(entry),
-        layout: None,
-        module: &module,
-        entry_point: Some(entry),
-        compilation_options: Default::default(),
-        cache: None,
-    })
-}
-
-/// Records one bake dispatch writing `target` with `params`.
-fn dispatch_bake(
-    device: &wgpu::Device,
-    encoder: &mut wgpu::CommandEncoder,
-    pipeline: &wgpu::ComputePipeline,
-    params: BakeParams,
-    target: &wgpu::TextureView,
-    groups: [u32; 3],
-) {
-    let buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some("nimbus bake params"),
-        contents: bytemuck::bytes_of(&params),
-        usage: wgpu::BufferUsages::UNIFORM,
-    });
-    let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: None,
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: buffer.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: wgpu::BindingResource::TextureView(target),
-            },
-        ],
-    });
-    let mut pass = encoder.begin_compute_pass(&Default::default());
-    pass.set_pipeline(pipeline);
-    pass.set_bind_group(0, &bind, &[]);
-    pass.dispatch_workgroups(groups[0], groups[1], groups[2]);
-}
-
 /// Fills mips 1.. of a volume from mip 0.
 fn build_mips(device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, texture: &wgpu::Texture) {
     let pipeline = compute_pipeline(device, "mip_downsample", "downsample");
-    let layout = pipeline.get_bind_group_layout(0);
     for mip in 1..texture.mip_level_count() {
         let (src, dst) = (mip_view(texture, mip - 1), mip_view(texture, mip));
-        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: None,
-            layout: &layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&src),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: wgpu::BindingResource::TextureView(&dst),
-                },
-            ],
-        });
-        let edge = (texture.width() >> mip).max(1);
-        let groups = edge.div_ceil(4);
-        let mut pass = encoder.begin_compute_pass(&Default::default());
-        pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &bind, &[]);
-        pass.dispatch_workgroups(groups, groups, groups);
+        let g = (texture.width() >> mip).max(1).div_ceil(4);
+        dispatch(
+            device,
+            encoder,
+            &pipeline,
+            None,
+            &[(0, &src), (1, &dst)],
+            [g, g, g],
+        );
     }
 }
 
 impl NoiseTextures {
     /// Creates and bakes every noise texture. Submits its own command buffer.
-    pub fn new(
-        device: &wgpu::Device,
-        queue: &wgpu::Queue,
-        noise: &NoiseSettings,
-        weather: &WeatherMap,
-    ) -> Self {
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, noise: &NoiseSettings) -> Self {
         let base = volume(device, "nimbus base noise", noise.base_size);
         let detail = volume(device, "nimbus detail noise", noise.detail_size);
-        let weather_tex = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("nimbus weather map"),
-            size: wgpu::Extent3d {
-                width: noise.weather_size,
-                height: noise.weather_size,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba8Unorm,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING
-                | wgpu::TextureUsages::STORAGE_BINDING
-                | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
         let bn_size = noise.blue_noise_size;
         let blue = device.create_texture_with_data(
             queue,
@@ -197,7 +111,6 @@ impl NoiseTextures {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("nimbus noise bake"),
         });
-        let noise_pipe = |entry| compute_pipeline(device, "noise_bake", entry);
         for (texture, entry, size) in [
             (&base, "bake_base", noise.base_size),
             (&detail, "bake_detail", noise.detail_size),
@@ -205,42 +118,19 @@ impl NoiseTextures {
             let params = BakeParams {
                 seed: noise.seed,
                 size,
-                frequency: 0,
-                _pad: 0,
-                weather: [0.0; 4],
+                _pad: [0; 2],
             };
             let g = size.div_ceil(4);
-            dispatch_bake(
+            dispatch(
                 device,
                 &mut encoder,
-                &noise_pipe(entry),
-                params,
-                &mip_view(texture, 0),
+                &compute_pipeline(device, "noise_bake", entry),
+                Some(bytemuck::bytes_of(&params)),
+                &[(1, &mip_view(texture, 0))],
                 [g, g, g],
             );
             build_mips(device, &mut encoder, texture);
         }
-        let params = BakeParams {
-            seed: weather.seed,
-            size: noise.weather_size,
-            frequency: weather.frequency,
-            _pad: 0,
-            weather: [
-                weather.cloud_type,
-                weather.type_variation,
-                weather.density_variation,
-                0.0,
-            ],
-        };
-        let g = noise.weather_size.div_ceil(8);
-        dispatch_bake(
-            device,
-            &mut encoder,
-            &compute_pipeline(device, "weather_bake", "bake_weather"),
-            params,
-            &weather_tex.create_view(&Default::default()),
-            [g, g, 1],
-        );
         queue.submit([encoder.finish()]);
 
         let sampler = device.create_sampler(&wgpu::SamplerDescriptor {
@@ -256,11 +146,9 @@ impl NoiseTextures {
         Self {
             base_view: base.create_view(&Default::default()),
             detail_view: detail.create_view(&Default::default()),
-            weather_view: weather_tex.create_view(&Default::default()),
             blue_noise_view: blue.create_view(&Default::default()),
             base,
             detail,
-            weather: weather_tex,
             sampler,
         }
     }

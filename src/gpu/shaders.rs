@@ -23,6 +23,7 @@ pub(crate) const PHASE: (&str, &str) = shader!("phase.wgsl");
 pub(crate) const DENSITY: (&str, &str) = shader!("density.wgsl");
 pub(crate) const NOISE_BAKE: (&str, &str) = shader!("noise_bake.wgsl");
 pub(crate) const WEATHER_BAKE: (&str, &str) = shader!("weather_bake.wgsl");
+pub(crate) const WEATHER_BLEND: (&str, &str) = shader!("weather_blend.wgsl");
 pub(crate) const MIP_DOWNSAMPLE: (&str, &str) = shader!("mip_downsample.wgsl");
 pub(crate) const MARCH: (&str, &str) = shader!("march.wgsl");
 pub(crate) const COMPOSITE: (&str, &str) = shader!("composite.wgsl");
@@ -32,6 +33,7 @@ pub(crate) const COMPOSITE_SEPARATE: (&str, &str) = shader!("composite_separate.
 pub(crate) const PASSES: &[(&str, &[(&str, &str)])] = &[
     ("noise_bake", &[COMMON, NOISE, NOISE_BAKE]),
     ("weather_bake", &[COMMON, NOISE, WEATHER_BAKE]),
+    ("weather_blend", &[WEATHER_BLEND]),
     ("mip_downsample", &[MIP_DOWNSAMPLE]),
     ("march", &[COMMON, ATMOSPHERE, PHASE, DENSITY, MARCH]),
     ("composite_in_place", &[COMPOSITE]),
@@ -113,7 +115,7 @@ mod tests {
 
     #[test]
     fn self_contained_modules_validate_alone() {
-        for (name, src) in [COMMON, MIP_DOWNSAMPLE, COMPOSITE] {
+        for (name, src) in [COMMON, MIP_DOWNSAMPLE, COMPOSITE, WEATHER_BLEND] {
             validate(name, src);
         }
     }

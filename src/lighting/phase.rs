@@ -5,7 +5,8 @@
 
 use std::f32::consts::PI;
 
-use crate::error::{invalid_setting, Result};
+use crate::error::Result;
+use crate::validate::invalid as invalid_setting;
 
 /// Which phase function the clouds scatter with.
 #[derive(Clone, Copy, Debug, PartialEq)]

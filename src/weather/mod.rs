@@ -1,4 +1,11 @@
-//! Weather: the density model's per-cloud-type vertical profiles and the weather-map
-//! parameters. Presets and transitions build on this module.
+//! Weather: presets as data, the transition timeline, and the density model's per-cloud-type
+//! vertical profiles. Pure CPU code; `gpu/weather.rs` bakes and blends the maps.
 
+pub mod preset;
 pub mod profile;
+pub mod transition;
+
+pub use preset::{
+    CloudLayer, CloudShape, HighLayer, HorizonGradient, MapLayer, Preset, Weather, WeatherMap, Wind,
+};
+pub use transition::{MapAction, Timeline, WeatherSample, WindOffsets};

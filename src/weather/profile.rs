@@ -3,7 +3,7 @@
 //! profile, coverage from the weather map, softened layer boundaries, and detail erosion that
 //! is wispy at the bottom and billowy at the top. CPU mirror of `shaders/density.wgsl`.
 
-use crate::settings::CloudShape;
+use super::preset::CloudShape;
 
 /// Linear remap of `v` from [lo, hi] to [new_lo, new_hi] (Aetherius fig. 30), unclamped.
 /// A degenerate source range maps everything below `hi` to `new_lo` and the rest to `new_hi`.
@@ -108,11 +108,15 @@ pub struct NoiseSample {
     pub base: [f32; 4],
     /// Detail volume: R/G/B Worley octaves.
     pub detail: [f32; 3],
-    /// Weather map: R coverage, G cloud type, B density.
-    pub weather: [f32; 3],
+    /// Weather map: coverage of layers 1, 2, 3 (R, G, B).
+    pub coverage: [f32; 3],
+    /// Cloud type of layers 1, 2, 3 (from the weather, not the map).
+    pub types: [f32; 3],
 }
 
-/// The base shape before detail erosion (the cheap density used to find clouds).
+/// The base shape before detail erosion (the cheap density used to find clouds). Each layer
+/// erodes the shape with its own height profile and coverage; the densest layer wins
+/// (Aetherius, "Weather System").
 pub fn base_density(h: f32, s: &NoiseSample, shape: &CloudShape) -> f32 {
     if !(0.0..=1.0).contains(&h) {
         return 0.0;
@@ -120,19 +124,22 @@ pub fn base_density(h: f32, s: &NoiseSample, shape: &CloudShape) -> f32 {
     let [r, g, b, a] = s.base;
     let low_freq_fbm = g * 0.625 + b * 0.25 + a * 0.125;
     // Carve the Perlin-Worley shape with the Worley fBM.
-    let mut cloud = remap(r, low_freq_fbm - 1.0, 1.0, 0.0, 1.0);
-    cloud *= height_profile(h, s.weather[1]);
-    // Coverage erodes the shape: only the densest parts survive low coverage.
-    let coverage = shape.coverage * s.weather[0];
-    if coverage <= 0.0 {
-        return 0.0;
+    let carved = remap(r, low_freq_fbm - 1.0, 1.0, 0.0, 1.0);
+    let mut best = 0.0f32;
+    for i in 0..3 {
+        // Coverage erodes the shape: only the densest parts survive low coverage.
+        let coverage = shape.coverage * s.coverage[i];
+        if coverage <= 0.0 {
+            continue;
+        }
+        let cloud = carved * height_profile(h, s.types[i]);
+        best = best.max(saturate(remap(cloud, 1.0 - coverage, 1.0, 0.0, 1.0)));
     }
-    let covered = saturate(remap(cloud, 1.0 - coverage, 1.0, 0.0, 1.0));
-    covered * layer_softening(h, shape.layer_softness)
+    best * layer_softening(h, shape.layer_softness)
 }
 
 /// The full density (before multiplying by extinction): base shape eroded by detail noise,
-/// wispy at the bottom and billowy at the top, times the global and weather-map density.
+/// wispy at the bottom and billowy at the top, times the global density.
 pub fn density(h: f32, s: &NoiseSample, shape: &CloudShape) -> f32 {
     let base = base_density(h, s, shape);
     if base <= 0.0 {
@@ -144,7 +151,7 @@ pub fn density(h: f32, s: &NoiseSample, shape: &CloudShape) -> f32 {
     let mut detail = high_freq_fbm + (1.0 - 2.0 * high_freq_fbm) * saturate(h * 5.0);
     detail *= shape.detail_strength * (-shape.coverage * 0.75).exp();
     let eroded = saturate(remap(base, detail, 1.0, 0.0, 1.0));
-    eroded * shape.density * s.weather[2]
+    eroded * shape.density
 }
 
 #[cfg(test)]
@@ -155,8 +162,42 @@ mod tests {
         NoiseSample {
             base: [0.8, 0.5, 0.5, 0.5],
             detail: [0.3, 0.4, 0.5],
-            weather: [coverage, cloud_type, 1.0],
+            coverage: [coverage, 0.0, 0.0],
+            types: [cloud_type, 0.0, 0.0],
         }
+    }
+
+    #[test]
+    fn the_densest_layer_wins() {
+        let shape = CloudShape {
+            coverage: 0.9,
+            detail_strength: 0.0,
+            ..CloudShape::default()
+        };
+        // Layer 1 stratus (thin, low), layer 2 cumulonimbus (tall).
+        let both = NoiseSample {
+            coverage: [1.0, 0.8, 0.0],
+            types: [0.0, 1.0, 0.0],
+            ..sample(0.0, 0.0)
+        };
+        let only = |i: usize| {
+            let mut s = both;
+            s.coverage = [0.0; 3];
+            s.coverage[i] = both.coverage[i];
+            s
+        };
+        for h in [0.05, 0.1, 0.5, 0.8] {
+            let d = base_density(h, &both, &shape);
+            let d0 = base_density(h, &only(0), &shape);
+            let d1 = base_density(h, &only(1), &shape);
+            assert!(
+                (d - d0.max(d1)).abs() < 1e-6,
+                "h={h}: {d} vs max({d0}, {d1})"
+            );
+        }
+        // High in the layer only the cumulonimbus reaches.
+        assert_eq!(base_density(0.6, &only(0), &shape), 0.0);
+        assert!(base_density(0.6, &both, &shape) > 0.0);
     }
 
     #[test]

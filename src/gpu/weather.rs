@@ -1,0 +1,152 @@
+//! The weather maps on the GPU: three RGBA8 textures rotating through the roles "from", "to"
+//! and spare. A new weather is generated into a free texture; an interrupted transition is
+//! frozen by blending "from" and "to" into the spare, which becomes the new "from".
+
+use bytemuck::{Pod, Zeroable};
+
+use super::compute::{compute_pipeline, dispatch, map_texture};
+use crate::weather::{MapAction, Weather};
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct BakeParams {
+    seed: u32,
+    size: u32,
+    _pad: [u32; 2],
+    frequency: [u32; 4],
+    amount: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Pod, Zeroable)]
+struct BlendParams {
+    weight: f32,
+    size: u32,
+    _pad: [u32; 2],
+}
+
+pub(crate) struct WeatherMaps {
+    textures: [wgpu::Texture; 3],
+    views: [wgpu::TextureView; 3],
+    from: usize,
+    to: usize,
+    bake: wgpu::ComputePipeline,
+    blend: wgpu::ComputePipeline,
+    size: u32,
+}
+
+impl WeatherMaps {
+    /// Creates the maps with `weather` as both "from" and "to". Submits its own work.
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, size: u32, weather: &Weather) -> Self {
+        let textures =
+            [0, 1, 2].map(|i| map_texture(device, &format!("nimbus weather map {i}"), size));
+        let views = [0, 1, 2].map(|i| textures[i].create_view(&Default::default()));
+        let mut maps = Self {
+            textures,
+            views,
+            from: 0,
+            to: 1,
+            bake: compute_pipeline(device, "weather_bake", "bake_weather"),
+            blend: compute_pipeline(device, "weather_blend", "blend_maps"),
+            size,
+        };
+        maps.reset(device, queue, weather);
+        maps
+    }
+
+    fn groups(&self) -> [u32; 3] {
+        let g = self.size.div_ceil(8);
+        [g, g, 1]
+    }
+
+    fn generate(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        slot: usize,
+        w: &Weather,
+    ) {
+        let mut frequency = [1u32; 4];
+        let mut amount = [0.0f32; 4];
+        for (i, l) in w.map.layers.iter().take(3).enumerate() {
+            frequency[i] = l.frequency;
+            amount[i] = l.amount;
+        }
+        let params = BakeParams {
+            seed: w.map.seed,
+            size: self.size,
+            _pad: [0; 2],
+            frequency,
+            amount,
+        };
+        dispatch(
+            device,
+            encoder,
+            &self.bake,
+            Some(bytemuck::bytes_of(&params)),
+            &[(1, &self.views[slot])],
+            self.groups(),
+        );
+    }
+
+    /// Both maps become `weather`'s (an instant change).
+    pub fn reset(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, weather: &Weather) {
+        let mut encoder = device.create_command_encoder(&Default::default());
+        self.generate(device, &mut encoder, self.from, weather);
+        self.generate(device, &mut encoder, self.to, weather);
+        queue.submit([encoder.finish()]);
+    }
+
+    /// Carries out what the timeline decided for a request toward `target`.
+    pub fn apply(
+        &mut self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        action: MapAction,
+        target: &Weather,
+    ) {
+        let spare = 3 - self.from - self.to;
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("nimbus weather transition"),
+        });
+        match action {
+            MapAction::KeepFrom => {}
+            MapAction::ToBecomesFrom => {
+                (self.from, self.to) = (self.to, self.from);
+            }
+            MapAction::Bake(weight) => {
+                let params = BlendParams {
+                    weight,
+                    size: self.size,
+                    _pad: [0; 2],
+                };
+                dispatch(
+                    device,
+                    &mut encoder,
+                    &self.blend,
+                    Some(bytemuck::bytes_of(&params)),
+                    &[
+                        (1, &self.views[self.from]),
+                        (2, &self.views[self.to]),
+                        (3, &self.views[spare]),
+                    ],
+                    self.groups(),
+                );
+                // The frozen blend is the new start; the old start's texture is free.
+                (self.from, self.to) = (spare, self.from);
+            }
+        }
+        self.generate(device, &mut encoder, self.to, target);
+        queue.submit([encoder.finish()]);
+    }
+
+    /// (from, to) views for the march.
+    pub fn views(&self) -> (&wgpu::TextureView, &wgpu::TextureView) {
+        (&self.views[self.from], &self.views[self.to])
+    }
+
+    /// (from, to) textures, for readback.
+    pub fn textures(&self) -> (&wgpu::Texture, &wgpu::Texture) {
+        (&self.textures[self.from], &self.textures[self.to])
+    }
+}

@@ -1,0 +1,44 @@
+//! Helpers shared by the GPU test files.
+#![allow(dead_code)]
+
+use nimbus::settings::NoiseSettings;
+use nimbus::{Headless, Settings};
+
+pub const W: u32 = 160;
+pub const H: u32 = 90;
+
+/// A private runtime dir keeps Mesa from probing the session's.
+pub fn setup() {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        let dir = std::env::temp_dir().join(format!("nimbus-xdg-{}", std::process::id()));
+        let _ = std::fs::create_dir_all(&dir);
+        std::env::set_var("XDG_RUNTIME_DIR", dir);
+    }
+}
+
+pub fn headless(settings: Settings) -> Headless {
+    setup();
+    let mut h = Headless::new(settings).expect("a Vulkan adapter (install mesa-vulkan-drivers)");
+    h.resize(W, H).unwrap();
+    h
+}
+
+/// Small noise volumes keep the tests quick on software Vulkan.
+pub fn small_noise(seed: u32) -> Settings {
+    Settings {
+        noise: NoiseSettings {
+            seed,
+            base_size: 32,
+            detail_size: 16,
+            weather_size: 128,
+            blue_noise_size: 16,
+            ..NoiseSettings::default()
+        },
+        ..Settings::default()
+    }
+}
+
+/// Linear value as stored in an RGBA16F target.
+pub fn f16(v: f32) -> f32 {
+    half::f16::from_f32(v).to_f32()
+}

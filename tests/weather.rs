@@ -1,0 +1,238 @@
+//! Weather on the GPU (lavapipe in CI): baked blends, rendered continuity across an
+//! interrupted transition, every preset, the high layer and the horizon gradient.
+
+mod common;
+use common::{headless, small_noise, H, W};
+
+use nimbus::demo::standard_views;
+use nimbus::weather::{HighLayer, Preset, Weather};
+use nimbus::{Error, Headless, Settings};
+
+fn quiet(mut s: Settings) -> Settings {
+    s.march.jitter = false; // the jitter pattern rotates every frame
+    s
+}
+
+fn render(h: &mut Headless, view: usize, time: f64) -> Vec<[f32; 4]> {
+    let v = standard_views()[view];
+    let scene = v.scene(W, H);
+    h.upload_scene(&scene.color, Some(&scene.depth)).unwrap();
+    h.render(&v.frame(W, H, time)).unwrap();
+    h.read_output().unwrap()
+}
+
+fn max_change(a: &[[f32; 4]], b: &[[f32; 4]]) -> f32 {
+    a.iter()
+        .zip(b)
+        .flat_map(|(p, q)| (0..3).map(move |c| (p[c] - q[c]).abs()))
+        .fold(0.0, f32::max)
+}
+
+#[test]
+fn baked_map_equals_the_blend_it_froze() {
+    let mut h = headless(small_noise(1));
+    let r = |h: &mut Headless| h.read_weather_maps().unwrap();
+    h.renderer_mut()
+        .set_weather(Weather::stormy(), 0.0, 10.0)
+        .unwrap();
+    let (from0, to0) = r(&mut h);
+    assert_ne!(from0, to0, "sparse and stormy maps differ");
+    // Interrupt at t = 5: the smoothstep weight is exactly 0.5.
+    h.renderer_mut()
+        .set_weather(Weather::clear(), 5.0, 10.0)
+        .unwrap();
+    let (baked, _) = r(&mut h);
+    let mut worst = 0i32;
+    for ((a, b), got) in from0.iter().zip(&to0).zip(&baked) {
+        let expect = (*a as f32 + (*b as f32 - *a as f32) * 0.5) / 255.0;
+        worst = worst.max((*got as i32 - (expect * 255.0).round() as i32).abs());
+    }
+    assert!(
+        worst <= 1,
+        "baked map differs from the blend by {worst}/255"
+    );
+    // A request after a transition finished reuses its target map as the start, untouched.
+    let (_, clear_map) = r(&mut h);
+    h.renderer_mut()
+        .set_weather(Weather::overcast(), 100.0, 5.0)
+        .unwrap();
+    assert_eq!(r(&mut h).0, clear_map);
+}
+
+#[test]
+fn interrupted_transition_does_not_pop() {
+    let mut h = headless(quiet(small_noise(1)));
+    h.renderer_mut()
+        .set_settings(quiet(Settings {
+            weather: Weather::cloudy(),
+            ..small_noise(1)
+        }))
+        .unwrap();
+    h.renderer_mut()
+        .set_weather(Weather::stormy(), 0.0, 20.0)
+        .unwrap();
+    let mut frames = Vec::new();
+    let interruption = 10.0;
+    for k in 0..13 {
+        let t = 4.0 + k as f64;
+        if t == interruption {
+            h.renderer_mut()
+                .set_weather(Weather::clear(), interruption, 20.0)
+                .unwrap();
+        }
+        frames.push((t, render(&mut h, 0, t)));
+    }
+    let changes: Vec<(f64, f32)> = frames
+        .windows(2)
+        .map(|w| (w[1].0, max_change(&w[0].1, &w[1].1)))
+        .collect();
+    let at = changes.iter().find(|(t, _)| *t == interruption).unwrap().1;
+    let mut others: Vec<f32> = changes
+        .iter()
+        .filter(|(t, _)| *t != interruption)
+        .map(|c| c.1)
+        .collect();
+    others.sort_by(f32::total_cmp);
+    let median = others[others.len() / 2];
+    eprintln!("largest per-pixel change per frame: {changes:?}");
+    assert!(median > 0.0, "the transition must change the picture");
+    assert!(
+        at <= 2.0 * median,
+        "interruption frame changed by {at}, median {median}"
+    );
+}
+
+#[test]
+fn same_requests_same_times_same_sky() {
+    let run = || {
+        let mut h = headless(quiet(small_noise(1)));
+        h.renderer_mut()
+            .set_weather(Weather::stormy(), 1.0, 8.0)
+            .unwrap();
+        h.renderer_mut()
+            .set_weather(Weather::overcast(), 4.0, 3.0)
+            .unwrap();
+        render(&mut h, 0, 5.5)
+    };
+    assert_eq!(run(), run());
+}
+
+#[test]
+fn every_preset_renders_and_looks_different() {
+    let mut h = headless(quiet(small_noise(1)));
+    let mut images = Vec::new();
+    for p in Preset::ALL {
+        h.renderer_mut().set_weather(p.weather(), 0.0, 0.0).unwrap();
+        let mut both = render(&mut h, 0, 0.0);
+        both.extend(render(&mut h, 3, 0.0));
+        assert!(
+            both.iter().flatten().all(|v| v.is_finite()),
+            "{p:?}: NaN or Inf"
+        );
+        images.push((p, both));
+        h.renderer_mut()
+            .set_settings(quiet(small_noise(1)))
+            .unwrap();
+    }
+    // Mean absolute difference of the linear output between every pair of presets, from the
+    // ground looking up and from 8 km looking down.
+    for (i, (pa, a)) in images.iter().enumerate() {
+        for (pb, b) in &images[i + 1..] {
+            let mean = a
+                .iter()
+                .zip(b)
+                .map(|(p, q)| (0..3).map(|c| (p[c] - q[c]).abs()).sum::<f32>() / 3.0)
+                .sum::<f32>()
+                / a.len() as f32;
+            eprintln!("{pa:?} vs {pb:?}: mean |difference| {mean:.4}");
+            assert!(mean > 0.01, "{pa:?} and {pb:?} look alike ({mean})");
+        }
+    }
+}
+
+#[test]
+fn high_layer_adds_thin_cirrus_to_any_weather() {
+    let mut h = headless(quiet(small_noise(1)));
+    let cirrus = HighLayer {
+        coverage: 0.7,
+        ..HighLayer::default()
+    };
+    h.renderer_mut()
+        .set_weather(Weather::clear().with_high_layer(cirrus), 0.0, 0.0)
+        .unwrap();
+    render(&mut h, 0, 0.0);
+    let clouds = h.read_clouds().unwrap();
+    let touched = clouds.iter().filter(|c| c[3] < 0.999).count();
+    assert!(
+        touched > clouds.len() / 20,
+        "cirrus covers only {touched} pixels"
+    );
+    // Thin: seen steeply (upper half of the view, 40-75 degrees up) it never becomes opaque.
+    // Near the horizon the slant path through the sheet is long, so there it may.
+    assert!(clouds.iter().all(|c| c.iter().all(|v| v.is_finite())));
+    let upper = &clouds[..(W * H / 2) as usize];
+    let darkest = upper.iter().map(|c| c[3]).fold(1.0f32, f32::min);
+    assert!(darkest > 0.4, "steep cirrus transmittance {darkest}");
+    h.renderer_mut()
+        .set_weather(Weather::stormy().with_high_layer(cirrus), 1.0, 0.0)
+        .unwrap();
+    let out = render(&mut h, 0, 1.0);
+    assert!(out.iter().flatten().all(|v| v.is_finite()));
+}
+
+#[test]
+fn horizon_gradient_puts_clouds_far_away_only() {
+    let mut h = headless(quiet(small_noise(1)));
+    let mut w = Weather::sparse().with_horizon_gradient();
+    w.clouds.coverage = 0.0;
+    w.horizon.coverage = 0.6;
+    h.renderer_mut().set_weather(w, 0.0, 0.0).unwrap();
+    render(&mut h, 1, 0.0);
+    let depth = h.read_cloud_depth().unwrap();
+    let clouds = h.read_clouds().unwrap();
+    let cloudy: Vec<f32> = depth
+        .iter()
+        .zip(&clouds)
+        .filter(|(_, c)| c[3] < 0.9)
+        .map(|(d, _)| *d)
+        .collect();
+    assert!(!cloudy.is_empty(), "the horizon gradient made no clouds");
+    let start = Weather::sparse().horizon.start_distance;
+    assert!(
+        cloudy.iter().all(|d| *d > start),
+        "a cloud nearer than {start} m"
+    );
+}
+
+#[test]
+fn bad_weather_requests_are_errors_and_change_nothing() {
+    let mut h = headless(quiet(small_noise(1)));
+    h.renderer_mut()
+        .set_weather(Weather::stormy(), 10.0, 5.0)
+        .unwrap();
+    let maps = h.read_weather_maps().unwrap();
+    let r = h.renderer_mut();
+    assert!(matches!(
+        r.set_weather(Weather::clear(), 9.0, 1.0),
+        Err(Error::InvalidWeather(_))
+    ));
+    assert!(matches!(
+        r.set_weather(Weather::clear(), 11.0, f64::NAN),
+        Err(Error::InvalidWeather(_))
+    ));
+    assert!(matches!(
+        r.set_weather(Weather::clear(), f64::INFINITY, 1.0),
+        Err(Error::InvalidWeather(_))
+    ));
+    let mut bad = Weather::clear();
+    bad.clouds.coverage = 2.0;
+    assert!(matches!(
+        r.set_weather(bad, 11.0, 1.0),
+        Err(Error::InvalidSettings { .. })
+    ));
+    assert_eq!(h.read_weather_maps().unwrap(), maps);
+    assert_eq!(
+        h.renderer().weather_at(20.0).weather.clouds,
+        Weather::stormy().clouds
+    );
+}
