@@ -158,8 +158,9 @@ fn cirrus_layer(cam: vec3f, dir: vec3f, max_t: f32, cos_theta: f32, sun_radiance
     let density = clamp(remap(streak, 1.0 - u.cirrus.x, 1.0, 0.0, 1.0), 0.0, 1.0);
     let mu = max(abs(dot(normalize(p + up * radius), dir)), 0.05);
     let transmittance = exp(-u.cirrus.z * density / mu);
-    // Ice crystals scatter less forward than droplets: eccentricity scaled by 0.7.
-    let source = sun_radiance * phase_eval(u32(u.misc.y), u.phase, cos_theta, 0.7) + u.ambient_top.rgb;
+    // Ice crystals scatter less forward than droplets, and light bounces between crystals
+    // (Wrenninge-style): a flatter lobe, eccentricity scaled by 0.4.
+    let source = sun_radiance * phase_eval(u32(u.misc.y), u.phase, cos_theta, 0.4) + u.ambient_top.rgb;
     return Cirrus((1.0 - transmittance) * source, transmittance, t);
 }
 

@@ -145,7 +145,7 @@ impl Default for CloudLayer {
 impl Default for CloudShape {
     fn default() -> Self {
         Self {
-            coverage: 0.45,
+            coverage: 0.4,
             density: 1.0,
             extinction: 0.04,
             albedo: 0.99,
@@ -168,7 +168,7 @@ impl Default for MapLayer {
 impl Default for WeatherMap {
     fn default() -> Self {
         Self {
-            seed: 7,
+            seed: 3,
             layers: vec![MapLayer::default()],
         }
     }
@@ -192,7 +192,7 @@ impl Default for HighLayer {
         Self {
             coverage: 0.0,
             altitude: 9_000.0,
-            optical_depth: 0.3,
+            optical_depth: 0.6,
         }
     }
 }
@@ -360,8 +360,8 @@ impl Weather {
             },
             clouds: CloudShape {
                 coverage: 0.8,
-                density: 1.6,
-                extinction: 0.06,
+                density: 1.2,
+                extinction: 0.05,
                 albedo: 0.97,
                 detail_strength: 0.4,
                 layer_softness: 0.06,
@@ -376,9 +376,17 @@ impl Weather {
                 detail_factor: 2.5,
                 ..Wind::default()
             },
-            ambient_top: Vec3::new(0.38, 0.4, 0.46) * 0.25,
-            ambient_bottom: Vec3::new(0.25, 0.26, 0.3) * 0.05,
+            ambient_top: Vec3::new(0.38, 0.4, 0.46) * 0.3,
+            ambient_bottom: Vec3::new(0.3, 0.31, 0.35) * 0.14,
             ..Weather::sparse()
+        }
+    }
+
+    /// A typical cirrus veil: 9 km up, 70% coverage.
+    pub fn cirrus() -> HighLayer {
+        HighLayer {
+            coverage: 0.7,
+            ..HighLayer::default()
         }
     }
 
