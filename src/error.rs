@@ -63,6 +63,9 @@ pub enum Error {
     /// The adapter refused to create a device.
     #[error("could not create a GPU device: {0}")]
     RequestDevice(String),
+    /// A window surface could not be created, configured or acquired.
+    #[error("window surface: {0}")]
+    Surface(String),
     /// wgpu reported a validation or out-of-memory error.
     #[error("GPU error: {0}")]
     Gpu(String),

@@ -37,18 +37,40 @@ pub struct Headless {
     in_place: bool,
 }
 
-/// Creates a device on the first adapter found. Backends follow `WGPU_BACKEND` when set
-/// (e.g. `vulkan`), else the platform's primary ones. wgpu's debug flag stays off: Debian's
-/// validation layers misread naga's debug SPIR-V.
-pub fn create_device() -> Result<(wgpu::Device, wgpu::Queue, wgpu::AdapterInfo)> {
+/// A device of Nimbus's own, and the window surface it presents to, if any.
+pub(crate) struct OwnedDevice {
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub adapter: wgpu::Adapter,
+    pub info: wgpu::AdapterInfo,
+    pub surface: Option<wgpu::Surface<'static>>,
+}
+
+/// Creates a device on the first adapter found (compatible with `window` when given).
+/// Backends follow `WGPU_BACKEND` when set (e.g. `vulkan`), else the platform's primary ones.
+/// wgpu's debug flag stays off: Debian's validation layers misread naga's debug SPIR-V.
+///
+/// # Safety
+/// The handles in `window` must stay valid for the life of the returned surface.
+pub(crate) unsafe fn create_owned_device(
+    window: Option<wgpu::SurfaceTargetUnsafe>,
+) -> Result<OwnedDevice> {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
     desc.backends = wgpu::Backends::PRIMARY;
     desc.flags = wgpu::InstanceFlags::empty();
     let instance = wgpu::Instance::new(desc.with_env());
+    let surface = match window {
+        Some(target) => Some(
+            // SAFETY: the caller guarantees the handles outlive the surface.
+            unsafe { instance.create_surface_unsafe(target) }
+                .map_err(|e| Error::Surface(e.to_string()))?,
+        ),
+        None => None,
+    };
     let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
         power_preference: wgpu::PowerPreference::HighPerformance,
         force_fallback_adapter: false,
-        compatible_surface: None,
+        compatible_surface: surface.as_ref(),
         ..Default::default()
     }))
     .map_err(|e| {
@@ -64,7 +86,46 @@ pub fn create_device() -> Result<(wgpu::Device, wgpu::Queue, wgpu::AdapterInfo)>
         ..Default::default()
     }))
     .map_err(|e| Error::RequestDevice(e.to_string()))?;
-    Ok((device, queue, adapter.get_info()))
+    let info = adapter.get_info();
+    Ok(OwnedDevice {
+        device,
+        queue,
+        adapter,
+        info,
+        surface,
+    })
+}
+
+/// Creates a headless device on the first adapter found. Backends follow `WGPU_BACKEND` when
+/// set (e.g. `vulkan`), else the platform's primary ones.
+pub fn create_device() -> Result<(wgpu::Device, wgpu::Queue, wgpu::AdapterInfo)> {
+    // SAFETY: no window handles are involved.
+    let d = unsafe { create_owned_device(None) }?;
+    Ok((d.device, d.queue, d.info))
+}
+
+/// Installs a handler that collects wgpu errors instead of panicking (wgpu's default).
+pub(crate) fn collect_uncaptured_errors(device: &wgpu::Device) -> Arc<Mutex<Vec<String>>> {
+    let errors = Arc::new(Mutex::new(Vec::new()));
+    let sink = errors.clone();
+    device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+        if let Ok(mut v) = sink.lock() {
+            v.push(e.to_string());
+        }
+    }));
+    errors
+}
+
+/// Drains collected wgpu errors into one `Error::Gpu`.
+pub(crate) fn take_errors(errors: &Mutex<Vec<String>>) -> Result<()> {
+    let mut v = errors
+        .lock()
+        .map_err(|_| Error::Gpu("error log poisoned".into()))?;
+    if v.is_empty() {
+        Ok(())
+    } else {
+        Err(Error::Gpu(std::mem::take(&mut *v).join("; ")))
+    }
 }
 
 fn to_f16(data: &[[f32; 4]]) -> Vec<u8> {
@@ -89,13 +150,7 @@ impl Headless {
         settings.validate()?;
         let (device, queue, adapter_info) = create_device()?;
         // Nothing may panic: wgpu errors outside our scopes are collected and reported.
-        let errors = Arc::new(Mutex::new(Vec::new()));
-        let sink = errors.clone();
-        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
-            if let Ok(mut v) = sink.lock() {
-                v.push(e.to_string());
-            }
-        }));
+        let errors = collect_uncaptured_errors(&device);
         let renderer = Renderer::new(&device, &queue, settings)?;
         Ok(Self {
             device,
@@ -129,15 +184,7 @@ impl Headless {
     }
 
     fn take_errors(&self) -> Result<()> {
-        let mut v = self
-            .errors
-            .lock()
-            .map_err(|_| Error::Gpu("error log poisoned".into()))?;
-        if v.is_empty() {
-            Ok(())
-        } else {
-            Err(Error::Gpu(std::mem::take(&mut *v).join("; ")))
-        }
+        take_errors(&self.errors)
     }
 
     /// (Re)creates the targets at `width`×`height`. The scene starts black with no depth.

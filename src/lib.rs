@@ -24,6 +24,7 @@
 pub mod atmosphere;
 pub mod demo;
 pub mod error;
+pub mod ffi;
 pub mod frame;
 mod gpu;
 pub mod headless;

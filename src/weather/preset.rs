@@ -214,20 +214,20 @@ impl Default for Weather {
     }
 }
 
-/// The built-in presets, by stable id (the C API uses the numbers).
+/// The built-in presets, by stable id (the C API's `NIMBUS_PRESET_*`; 0 is no preset).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 #[repr(u32)]
 pub enum Preset {
     /// No clouds.
-    Clear = 0,
+    Clear = 1,
     /// Fair-weather cumulus.
-    Sparse = 1,
+    Sparse = 2,
     /// Cumulus over a broken stratocumulus deck.
-    Cloudy = 2,
+    Cloudy = 3,
     /// A closed low deck.
-    Overcast = 3,
+    Overcast = 4,
     /// Towering cumulonimbus over a dark deck.
-    Stormy = 4,
+    Stormy = 5,
 }
 
 impl Preset {

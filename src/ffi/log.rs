@@ -1,0 +1,91 @@
+//! Forwards Nimbus's and wgpu's log messages to a C callback: a cdylib has no logger otherwise.
+
+use std::ffi::{c_char, c_void, CString};
+use std::sync::Mutex;
+
+use super::{boundary, FfiError, NIMBUS_OK};
+
+/// Receives one log message: `level` 1 error, 2 warning, 3 info, 4 debug, 5 trace. The message
+/// is valid only during the call. May be called from any thread that uses Nimbus.
+pub type NimbusLogCallback =
+    Option<unsafe extern "C" fn(level: i32, message: *const c_char, user_data: *mut c_void)>;
+
+struct Sink {
+    callback: NimbusLogCallback,
+    user_data: usize,
+}
+
+static SINK: Mutex<Option<Sink>> = Mutex::new(None);
+
+struct Forwarder;
+
+impl log::Log for Forwarder {
+    fn enabled(&self, metadata: &log::Metadata) -> bool {
+        metadata.level() <= log::max_level()
+    }
+
+    fn log(&self, record: &log::Record) {
+        if !self.enabled(record.metadata()) {
+            return;
+        }
+        let Ok(sink) = SINK.lock() else { return };
+        if let Some(Sink {
+            callback: Some(cb),
+            user_data,
+        }) = &*sink
+        {
+            let text = format!("{}: {}", record.target(), record.args()).replace('\0', " ");
+            if let Ok(c) = CString::new(text) {
+                // SAFETY: the host registered this callback for exactly these arguments.
+                unsafe { cb(record.level() as i32, c.as_ptr(), *user_data as *mut c_void) };
+            }
+        }
+    }
+
+    fn flush(&self) {}
+}
+
+static FORWARDER: Forwarder = Forwarder;
+
+/// Sets (or, with NULL, removes) the log callback for the whole library. `max_level` 0 turns
+/// logging off, 1 errors only ... 5 everything. Returns `NIMBUS_ERROR_INVALID_ARGUMENT` for a
+/// level outside 0..=5.
+#[no_mangle]
+pub extern "C" fn nimbus_set_log_callback(
+    callback: NimbusLogCallback,
+    user_data: *mut c_void,
+    max_level: i32,
+) -> i32 {
+    boundary(
+        || {
+            let filter = match max_level {
+                0 => log::LevelFilter::Off,
+                1 => log::LevelFilter::Error,
+                2 => log::LevelFilter::Warn,
+                3 => log::LevelFilter::Info,
+                4 => log::LevelFilter::Debug,
+                5 => log::LevelFilter::Trace,
+                _ => {
+                    return Err(FfiError::arg(format!(
+                        "max_level must be 0..=5, got {max_level}"
+                    )))
+                }
+            };
+            // Our own copy of `log` in the cdylib: setting it can only fail if already set.
+            let _ = log::set_logger(&FORWARDER);
+            *SINK
+                .lock()
+                .map_err(|_| FfiError::arg("log sink poisoned"))? = Some(Sink {
+                callback,
+                user_data: user_data as usize,
+            });
+            log::set_max_level(if callback.is_some() {
+                filter
+            } else {
+                log::LevelFilter::Off
+            });
+            Ok(NIMBUS_OK)
+        },
+        |_, _| {},
+    )
+}

@@ -1,0 +1,213 @@
+//! The C ABI: a thin translation onto the Rust API and nothing more (rustls-ffi discipline).
+//!
+//! - Opaque handles, created and destroyed only here; `_destroy(NULL)` is a no-op.
+//! - Every fallible call returns an `int32_t`: 0 success, negative errors, positive non-error
+//!   status; out-parameters are written only on success.
+//! - Enums cross as plain integers and are validated; unknown values are errors.
+//! - Every pointer is null-checked; every entry point runs inside `catch_unwind`. A panic
+//!   returns `NIMBUS_ERROR_PANIC` and poisons the context.
+//! - Root structs carry `next` chains of `{s_type, next}` extension structs.
+
+mod context;
+mod log;
+mod texture;
+mod types;
+
+use std::cell::RefCell;
+use std::ffi::{c_char, CString};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+pub use context::*;
+pub use log::*;
+pub use texture::*;
+pub use types::*;
+
+use crate::Error;
+
+/// Major version of the library; a context made with a header of another major version fails.
+pub const NIMBUS_VERSION_MAJOR: u32 = 0;
+/// Minor version.
+pub const NIMBUS_VERSION_MINOR: u32 = 1;
+/// Patch version.
+pub const NIMBUS_VERSION_PATCH: u32 = 0;
+/// The ABI version this header describes: (major << 16) | minor. Pass it in
+/// `NimbusContextDesc::abi_version`.
+pub const NIMBUS_ABI_VERSION: u32 = (NIMBUS_VERSION_MAJOR << 16) | NIMBUS_VERSION_MINOR;
+
+/// Success.
+pub const NIMBUS_OK: i32 = 0;
+/// Positive status: the frame was not presented (window minimised, surface outdated or lost
+/// and reconfigured); render again next frame. Not an error.
+pub const NIMBUS_STATUS_FRAME_SKIPPED: i32 = 1;
+/// A required pointer argument was NULL.
+pub const NIMBUS_ERROR_NULL_POINTER: i32 = -1;
+/// An argument is out of range, NaN, or an unknown enum value or flag.
+pub const NIMBUS_ERROR_INVALID_ARGUMENT: i32 = -2;
+/// A chained struct has an unknown `s_type`.
+pub const NIMBUS_ERROR_UNKNOWN_STRUCT: i32 = -3;
+/// The header's ABI major version does not match the library's.
+pub const NIMBUS_ERROR_ABI_VERSION: i32 = -4;
+/// A setting is out of range.
+pub const NIMBUS_ERROR_INVALID_SETTINGS: i32 = -5;
+/// The camera, sun or time of a frame is unusable (NaN, non-invertible, mismatched flags).
+pub const NIMBUS_ERROR_INVALID_FRAME: i32 = -6;
+/// A texture or target has the wrong size, format or role, or a data size does not match.
+pub const NIMBUS_ERROR_INVALID_TARGET: i32 = -7;
+/// No GPU adapter was found (install Mesa's software Vulkan on machines without a GPU).
+pub const NIMBUS_ERROR_NO_ADAPTER: i32 = -8;
+/// The GPU device could not be created, or reported a validation / out-of-memory error.
+pub const NIMBUS_ERROR_GPU: i32 = -9;
+/// A preset file is missing or malformed (the message names the line and field).
+pub const NIMBUS_ERROR_PRESET_FILE: i32 = -10;
+/// A weather request is unusable (bad duration, earlier than the running transition).
+pub const NIMBUS_ERROR_WEATHER: i32 = -11;
+/// The window surface could not be created or configured.
+pub const NIMBUS_ERROR_SURFACE: i32 = -12;
+/// A panic inside Nimbus was caught; the context is now poisoned.
+pub const NIMBUS_ERROR_PANIC: i32 = -100;
+/// The context was poisoned by an earlier panic; only `nimbus_context_destroy` remains.
+pub const NIMBUS_ERROR_POISONED: i32 = -101;
+
+/// An error on its way to C: a result code and a message.
+#[derive(Debug)]
+pub(crate) struct FfiError {
+    pub code: i32,
+    pub message: String,
+}
+
+impl FfiError {
+    pub(crate) fn new(code: i32, message: impl Into<String>) -> Self {
+        Self {
+            code,
+            message: message.into(),
+        }
+    }
+    pub(crate) fn null(name: &str) -> Self {
+        Self::new(NIMBUS_ERROR_NULL_POINTER, format!("`{name}` is NULL"))
+    }
+    pub(crate) fn arg(message: impl Into<String>) -> Self {
+        Self::new(NIMBUS_ERROR_INVALID_ARGUMENT, message)
+    }
+}
+
+impl From<Error> for FfiError {
+    fn from(e: Error) -> Self {
+        let code = match &e {
+            Error::InvalidSettings { .. } => NIMBUS_ERROR_INVALID_SETTINGS,
+            Error::InvalidFrame { .. } => NIMBUS_ERROR_INVALID_FRAME,
+            Error::InvalidTarget { .. } | Error::UnsupportedFormat { .. } | Error::NotPrepared => {
+                NIMBUS_ERROR_INVALID_TARGET
+            }
+            Error::NoAdapter(_) => NIMBUS_ERROR_NO_ADAPTER,
+            Error::RequestDevice(_) | Error::Gpu(_) | Error::Readback(_) => NIMBUS_ERROR_GPU,
+            Error::PresetFile { .. } => NIMBUS_ERROR_PRESET_FILE,
+            Error::InvalidWeather(_) => NIMBUS_ERROR_WEATHER,
+            Error::Surface(_) => NIMBUS_ERROR_SURFACE,
+            Error::Image(_) => NIMBUS_ERROR_INVALID_ARGUMENT,
+        };
+        Self::new(code, e.to_string())
+    }
+}
+
+pub(crate) type FfiResult<T = ()> = Result<T, FfiError>;
+
+thread_local! {
+    /// The message of the last failed call on this thread (any handle or none).
+    static THREAD_ERROR: RefCell<CString> = RefCell::new(CString::default());
+}
+
+fn to_cstring(message: &str) -> CString {
+    CString::new(message.replace('\0', " ")).unwrap_or_default()
+}
+
+pub(crate) fn set_thread_error(message: &str) {
+    THREAD_ERROR.with(|e| *e.borrow_mut() = to_cstring(message));
+}
+
+pub(crate) fn thread_error_ptr() -> *const c_char {
+    THREAD_ERROR.with(|e| e.borrow().as_ptr())
+}
+
+fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
+    if let Some(s) = payload.downcast_ref::<&str>() {
+        s.to_string()
+    } else if let Some(s) = payload.downcast_ref::<String>() {
+        s.clone()
+    } else {
+        "unknown panic".to_string()
+    }
+}
+
+/// Runs `f` inside the panic boundary. Errors and panics become result codes; their messages
+/// go to the thread's last error (and `on_error`, which contexts use to keep their own).
+pub(crate) fn boundary(
+    f: impl FnOnce() -> FfiResult<i32>,
+    on_error: impl FnOnce(&str, bool),
+) -> i32 {
+    match catch_unwind(AssertUnwindSafe(f)) {
+        Ok(Ok(code)) => code,
+        Ok(Err(e)) => {
+            set_thread_error(&e.message);
+            on_error(&e.message, false);
+            e.code
+        }
+        Err(payload) => {
+            let message = format!("panic inside Nimbus: {}", panic_message(&*payload));
+            set_thread_error(&message);
+            on_error(&message, true);
+            NIMBUS_ERROR_PANIC
+        }
+    }
+}
+
+/// Reads a C string argument.
+///
+/// # Safety
+/// `p` must be NULL or point to a NUL-terminated string.
+pub(crate) unsafe fn c_str<'a>(p: *const c_char, name: &str) -> FfiResult<&'a str> {
+    if p.is_null() {
+        return Err(FfiError::null(name));
+    }
+    // SAFETY: non-null and NUL-terminated per the caller's contract.
+    unsafe { std::ffi::CStr::from_ptr(p) }
+        .to_str()
+        .map_err(|_| FfiError::arg(format!("`{name}` is not valid UTF-8")))
+}
+
+/// The library's version as (major << 16) | (minor << 8) | patch.
+#[no_mangle]
+pub extern "C" fn nimbus_version() -> u32 {
+    (NIMBUS_VERSION_MAJOR << 16) | (NIMBUS_VERSION_MINOR << 8) | NIMBUS_VERSION_PATCH
+}
+
+/// The library's version as text, e.g. "0.1.0". Static storage; never free it.
+#[no_mangle]
+pub extern "C" fn nimbus_version_string() -> *const c_char {
+    concat!(env!("CARGO_PKG_VERSION"), "\0").as_ptr().cast()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn version_constants_match_cargo_toml() {
+        let v = |s: &str| s.parse::<u32>().unwrap();
+        assert_eq!(NIMBUS_VERSION_MAJOR, v(env!("CARGO_PKG_VERSION_MAJOR")));
+        assert_eq!(NIMBUS_VERSION_MINOR, v(env!("CARGO_PKG_VERSION_MINOR")));
+        assert_eq!(NIMBUS_VERSION_PATCH, v(env!("CARGO_PKG_VERSION_PATCH")));
+    }
+
+    #[test]
+    fn boundary_turns_panics_and_errors_into_codes() {
+        let mut poisoned = false;
+        let code = boundary(|| panic!("boom"), |_, p| poisoned = p);
+        assert_eq!(code, NIMBUS_ERROR_PANIC);
+        assert!(poisoned);
+        let code = boundary(|| Err(FfiError::arg("bad")), |_, _| {});
+        assert_eq!(code, NIMBUS_ERROR_INVALID_ARGUMENT);
+        // SAFETY: thread_error_ptr returns a valid C string of this thread.
+        let msg = unsafe { std::ffi::CStr::from_ptr(thread_error_ptr()) };
+        assert_eq!(msg.to_str().unwrap(), "bad");
+    }
+}

@@ -1,0 +1,227 @@
+//! Textures the host creates, uploads into and reads back: for hosts (and tests) without a GPU
+//! API of their own. Each holds its own reference to the device: it may outlive its context.
+
+use std::ffi::c_void;
+
+use super::context::{with_ctx, NimbusContext};
+use super::{boundary, check_chain, FfiError, FfiResult, NimbusTextureDesc, NIMBUS_OK};
+use super::{
+    NIMBUS_ERROR_INVALID_TARGET, NIMBUS_FORMAT_R32_FLOAT, NIMBUS_FORMAT_RGBA16_FLOAT,
+    NIMBUS_FORMAT_RGBA32_FLOAT, NIMBUS_FORMAT_RGBA8_UNORM, NIMBUS_FORMAT_RGBA8_UNORM_SRGB,
+};
+use crate::gpu::readback::read_texture;
+use crate::headless::MAX_HEADLESS_SIZE;
+
+/// An opaque texture handle (see `nimbus_texture_create`).
+pub struct NimbusTexture {
+    pub(crate) texture: wgpu::Texture,
+    pub(crate) view: wgpu::TextureView,
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    bytes_per_pixel: u32,
+}
+
+fn format_of(format: u32) -> FfiResult<(wgpu::TextureFormat, u32)> {
+    use wgpu::TextureFormat as F;
+    Ok(match format {
+        NIMBUS_FORMAT_RGBA8_UNORM => (F::Rgba8Unorm, 4),
+        NIMBUS_FORMAT_RGBA8_UNORM_SRGB => (F::Rgba8UnormSrgb, 4),
+        NIMBUS_FORMAT_RGBA16_FLOAT => (F::Rgba16Float, 8),
+        NIMBUS_FORMAT_RGBA32_FLOAT => (F::Rgba32Float, 16),
+        NIMBUS_FORMAT_R32_FLOAT => (F::R32Float, 4),
+        _ => return Err(FfiError::arg(format!("unknown texture format {format}"))),
+    })
+}
+
+impl NimbusTexture {
+    fn byte_size(&self) -> usize {
+        (self.texture.width() * self.texture.height() * self.bytes_per_pixel) as usize
+    }
+
+    fn check_size(&self, size: usize) -> FfiResult {
+        if size == self.byte_size() {
+            Ok(())
+        } else {
+            Err(FfiError::new(
+                NIMBUS_ERROR_INVALID_TARGET,
+                format!(
+                    "data is {size} bytes but a {}x{} texture of this format holds {}",
+                    self.texture.width(),
+                    self.texture.height(),
+                    self.byte_size()
+                ),
+            ))
+        }
+    }
+}
+
+/// Creates a texture on the context's device: color formats can be scene color or output,
+/// `NIMBUS_FORMAT_R32_FLOAT` holds scene depth. Contents start zeroed. `*out` is written only
+/// on success; free it with `nimbus_texture_destroy`.
+///
+/// # Safety
+/// `ctx`, `desc` and `out` must be NULL or valid pointers.
+#[no_mangle]
+pub unsafe extern "C" fn nimbus_texture_create(
+    ctx: *mut NimbusContext,
+    desc: *const NimbusTextureDesc,
+    out: *mut *mut NimbusTexture,
+) -> i32 {
+    // SAFETY: pointers are checked before use; the caller guarantees validity otherwise.
+    unsafe {
+        with_ctx(ctx, |inner| {
+            let desc = desc.as_ref().ok_or_else(|| FfiError::null("desc"))?;
+            if out.is_null() {
+                return Err(FfiError::null("out"));
+            }
+            check_chain(desc.next, &[])?;
+            let (format, bytes_per_pixel) = format_of(desc.format)?;
+            for (name, v) in [("width", desc.width), ("height", desc.height)] {
+                if v == 0 || v > MAX_HEADLESS_SIZE {
+                    return Err(FfiError::arg(format!(
+                        "texture {name} must be in 1..={MAX_HEADLESS_SIZE}, got {v}"
+                    )));
+                }
+            }
+            use wgpu::TextureUsages as U;
+            let mut usage = U::TEXTURE_BINDING | U::COPY_DST | U::COPY_SRC;
+            if format != wgpu::TextureFormat::R32Float {
+                usage |= U::RENDER_ATTACHMENT;
+            }
+            let device = inner.device.clone();
+            let texture = crate::renderer::gpu_scope(&device, || {
+                device.create_texture(&wgpu::TextureDescriptor {
+                    label: Some("nimbus host texture"),
+                    size: wgpu::Extent3d {
+                        width: desc.width,
+                        height: desc.height,
+                        depth_or_array_layers: 1,
+                    },
+                    mip_level_count: 1,
+                    sample_count: 1,
+                    dimension: wgpu::TextureDimension::D2,
+                    format,
+                    usage,
+                    view_formats: &[],
+                })
+            })?;
+            let tex = NimbusTexture {
+                view: texture.create_view(&Default::default()),
+                texture,
+                device,
+                queue: inner.queue.clone(),
+                bytes_per_pixel,
+            };
+            *out = Box::into_raw(Box::new(tex));
+            Ok(NIMBUS_OK)
+        })
+    }
+}
+
+/// Replaces the whole texture's contents with `size` bytes: rows from the top, tightly packed
+/// (width × bytes per pixel each), channels in format order (floats little-endian).
+///
+/// # Safety
+/// `tex` must be NULL or a live texture; `data` must be NULL or point to `size` readable bytes.
+#[no_mangle]
+pub unsafe extern "C" fn nimbus_texture_write(
+    tex: *mut NimbusTexture,
+    data: *const c_void,
+    size: usize,
+) -> i32 {
+    boundary(
+        || {
+            // SAFETY: checked for NULL; the caller guarantees validity.
+            let tex = unsafe { tex.as_ref() }.ok_or_else(|| FfiError::null("tex"))?;
+            if data.is_null() {
+                return Err(FfiError::null("data"));
+            }
+            tex.check_size(size)?;
+            // SAFETY: `data` points to `size` readable bytes per the caller's contract.
+            let bytes = unsafe { std::slice::from_raw_parts(data.cast::<u8>(), size) };
+            let (w, h) = (tex.texture.width(), tex.texture.height());
+            tex.queue.write_texture(
+                tex.texture.as_image_copy(),
+                bytes,
+                wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(w * tex.bytes_per_pixel),
+                    rows_per_image: Some(h),
+                },
+                wgpu::Extent3d {
+                    width: w,
+                    height: h,
+                    depth_or_array_layers: 1,
+                },
+            );
+            Ok(NIMBUS_OK)
+        },
+        |_, _| {},
+    )
+}
+
+/// Waits for the GPU and copies the texture into `data` (`size` bytes, layout as for
+/// `nimbus_texture_write`).
+///
+/// # Safety
+/// `tex` must be NULL or a live texture; `data` must be NULL or point to `size` writable bytes.
+#[no_mangle]
+pub unsafe extern "C" fn nimbus_texture_read(
+    tex: *const NimbusTexture,
+    data: *mut c_void,
+    size: usize,
+) -> i32 {
+    boundary(
+        || {
+            // SAFETY: checked for NULL; the caller guarantees validity.
+            let tex = unsafe { tex.as_ref() }.ok_or_else(|| FfiError::null("tex"))?;
+            if data.is_null() {
+                return Err(FfiError::null("data"));
+            }
+            tex.check_size(size)?;
+            let bytes = read_texture(&tex.device, &tex.queue, &tex.texture, 0)?;
+            // SAFETY: `data` has room for `size` == bytes.len() bytes per the caller's contract.
+            unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), data.cast::<u8>(), size) };
+            Ok(NIMBUS_OK)
+        },
+        |_, _| {},
+    )
+}
+
+/// Writes the number of bytes the texture holds (width × height × bytes per pixel) to `*out`.
+///
+/// # Safety
+/// `tex` must be NULL or a live texture; `out` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn nimbus_texture_byte_size(
+    tex: *const NimbusTexture,
+    out: *mut usize,
+) -> i32 {
+    boundary(
+        || {
+            // SAFETY: checked for NULL; the caller guarantees validity.
+            let tex = unsafe { tex.as_ref() }.ok_or_else(|| FfiError::null("tex"))?;
+            if out.is_null() {
+                return Err(FfiError::null("out"));
+            }
+            // SAFETY: non-null and writable per the caller's contract.
+            unsafe { *out = tex.byte_size() };
+            Ok(NIMBUS_OK)
+        },
+        |_, _| {},
+    )
+}
+
+/// Frees a texture. NULL is a no-op. The texture must not be in use by a running call.
+///
+/// # Safety
+/// `tex` must be NULL or a texture from `nimbus_texture_create`, not yet destroyed.
+#[no_mangle]
+pub unsafe extern "C" fn nimbus_texture_destroy(tex: *mut NimbusTexture) {
+    if !tex.is_null() {
+        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            // SAFETY: created by Box::into_raw in nimbus_texture_create, destroyed once.
+            drop(unsafe { Box::from_raw(tex) });
+        }));
+    }
+}
