@@ -1,0 +1,113 @@
+/* A small scene "rendered" on the CPU so depth occlusion of the clouds is visible: a sky
+ * gradient, a checkered ground plane and a few towers, some tall enough to reach into the
+ * cloud layer. Produces linear RGBA color and clip-space depth (standard convention).
+ * Header-only, C99. */
+#ifndef NIMBUS_SCENE_H
+#define NIMBUS_SCENE_H
+
+#include <math.h>
+#include "camera.h"
+
+typedef struct { vec3 lo, hi, albedo; } SceneBox;
+
+static const SceneBox SCENE_BOXES[] = {
+    {{-900.0f, 0.0f, -5200.0f}, {-400.0f, 1900.0f, -4700.0f}, {0.45f, 0.42f, 0.40f}},
+    {{300.0f, 0.0f, -7400.0f}, {1100.0f, 2600.0f, -6600.0f}, {0.35f, 0.38f, 0.42f}},
+    {{-3200.0f, 0.0f, -9000.0f}, {-2200.0f, 1200.0f, -8000.0f}, {0.40f, 0.36f, 0.30f}},
+    {{2400.0f, 0.0f, -3600.0f}, {2800.0f, 700.0f, -3200.0f}, {0.50f, 0.45f, 0.38f}},
+    {{-1800.0f, 0.0f, -2200.0f}, {-1600.0f, 420.0f, -2000.0f}, {0.55f, 0.50f, 0.45f}},
+};
+
+static inline vec3 scene_sky(vec3 d, vec3 sun, vec3 sun_color, float day) {
+    float t, g;
+    vec3 zenith = v3(0.18f, 0.33f, 0.75f), horizon = v3(0.65f, 0.75f, 0.9f), c;
+    t = 1.0f - (d.y > 0.0f ? d.y : 0.0f);
+    t = t * t * t * t;
+    c = v3_add(v3_scale(zenith, 1.0f - t), v3_scale(horizon, t));
+    g = v3_dot(d, sun);
+    g = g > 0.0f ? powf(g, 32.0f) * 1.5f : 0.0f;
+    return v3_scale(v3_add(v3_scale(c, day), v3_scale(sun_color, g)), 0.9f);
+}
+
+/* Ray vs axis-aligned box (slab test): the entry distance and normal, if hit in front. */
+static inline int scene_box_hit(vec3 o, vec3 d, const SceneBox *b, float *t_out, vec3 *n_out) {
+    float t0 = 0.0f, t1 = 1e30f;
+    int axis, near_axis = -1;
+    float sign = 0.0f;
+    for (axis = 0; axis < 3; axis++) {
+        float oa = axis == 0 ? o.x : axis == 1 ? o.y : o.z;
+        float da = axis == 0 ? d.x : axis == 1 ? d.y : d.z;
+        float lo = axis == 0 ? b->lo.x : axis == 1 ? b->lo.y : b->lo.z;
+        float hi = axis == 0 ? b->hi.x : axis == 1 ? b->hi.y : b->hi.z;
+        if (fabsf(da) < 1e-9f) {
+            if (oa < lo || oa > hi) return 0;
+        } else {
+            float a = (lo - oa) / da, c = (hi - oa) / da, s = -1.0f;
+            if (a > c) { float tmp = a; a = c; c = tmp; s = 1.0f; }
+            if (a > t0) { t0 = a; near_axis = axis; sign = s; }
+            if (c < t1) t1 = c;
+            if (t0 > t1) return 0;
+        }
+    }
+    if (near_axis < 0) return 0; /* inside the box */
+    *t_out = t0;
+    *n_out = v3(near_axis == 0 ? sign : 0.0f, near_axis == 1 ? sign : 0.0f, near_axis == 2 ? sign : 0.0f);
+    return 1;
+}
+
+/* Fills `color` (w*h*4 floats, linear) and `depth` (w*h floats, 1 = sky) for a camera at
+ * `eye` looking along `fwd` (unit) with vertical field of view `fov_y`; `view_proj` maps hits
+ * to clip space for their depth. */
+static inline void scene_render(float *color, float *depth, int w, int h, vec3 eye, vec3 fwd,
+                                float fov_y, const float view_proj[16], vec3 sun, vec3 sun_color,
+                                float sun_illuminance) {
+    vec3 right = v3_norm(v3_cross(fwd, v3(0.0f, 1.0f, 0.0f)));
+    vec3 up = v3_cross(right, fwd);
+    float tan_half = tanf(0.5f * fov_y), aspect = (float)w / (float)h;
+    float day = sun.y * 4.0f, light = sun_illuminance / 10.0f;
+    int x, y;
+    size_t i;
+    day = day < 0.15f ? 0.15f : day > 1.0f ? 1.0f : day;
+    for (y = 0; y < h; y++) {
+        for (x = 0; x < w; x++) {
+            float nx = ((float)x + 0.5f) / (float)w * 2.0f - 1.0f;
+            float ny = 1.0f - ((float)y + 0.5f) / (float)h * 2.0f;
+            vec3 d = v3_norm(v3_add(fwd, v3_add(v3_scale(right, nx * tan_half * aspect), v3_scale(up, ny * tan_half))));
+            float best = 1e30f;
+            vec3 n = v3(0.0f, 1.0f, 0.0f), albedo = v3(0.0f, 0.0f, 0.0f), c;
+            size_t b;
+            i = (size_t)y * (size_t)w + (size_t)x;
+            if (d.y < -1e-6f && eye.y > 0.0f) {
+                float t = -eye.y / d.y;
+                vec3 p = v3_add(eye, v3_scale(d, t));
+                int checker = ((int)floorf(p.x / 400.0f) + (int)floorf(p.z / 400.0f)) & 1;
+                best = t;
+                albedo = checker ? v3(0.16f, 0.22f, 0.10f) : v3(0.20f, 0.26f, 0.12f);
+            }
+            for (b = 0; b < sizeof SCENE_BOXES / sizeof SCENE_BOXES[0]; b++) {
+                float t;
+                vec3 nb;
+                if (scene_box_hit(eye, d, &SCENE_BOXES[b], &t, &nb) && t < best) {
+                    best = t;
+                    n = nb;
+                    albedo = SCENE_BOXES[b].albedo;
+                }
+            }
+            if (best < 1e29f) {
+                vec3 hit = v3_add(eye, v3_scale(d, best)), ndc;
+                float lambert = v3_dot(n, sun), fog = 1.0f - expf(-best / 40000.0f);
+                lambert = lambert > 0.0f ? lambert : 0.0f;
+                c = v3_scale(albedo, (0.25f * day + 0.6f * lambert * light));
+                c = v3_add(v3_scale(c, 1.0f - fog), v3_scale(scene_sky(v3(d.x, 0.05f, d.z), sun, sun_color, day), fog));
+                mat_project(view_proj, hit, &ndc);
+                depth[i] = ndc.z < 0.0f ? 0.0f : ndc.z > 1.0f ? 1.0f : ndc.z;
+            } else {
+                c = scene_sky(d, sun, sun_color, day);
+                depth[i] = 1.0f;
+            }
+            color[i * 4 + 0] = c.x; color[i * 4 + 1] = c.y; color[i * 4 + 2] = c.z; color[i * 4 + 3] = 1.0f;
+        }
+    }
+}
+
+#endif
