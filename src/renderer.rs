@@ -248,22 +248,14 @@ impl Renderer {
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
-            let no_depth = device
-                .create_texture(&wgpu::TextureDescriptor {
-                    label: Some("nimbus no scene depth"),
-                    size: wgpu::Extent3d {
-                        width: 1,
-                        height: 1,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
-                    format: F::Depth32Float,
-                    usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                    view_formats: &[],
-                })
-                .create_view(&Default::default());
+            let no_depth = crate::gpu::texture_2d(
+                device,
+                "nimbus no scene depth",
+                (1, 1),
+                F::Depth32Float,
+                wgpu::TextureUsages::TEXTURE_BINDING,
+            )
+            .create_view(&Default::default());
             Self {
                 device: device.clone(),
                 queue: queue.clone(),
@@ -415,24 +407,9 @@ impl Renderer {
         if self.sized.as_ref().is_some_and(|s| s.size == size) {
             return;
         }
-        let make = |label, format| {
-            self.device.create_texture(&wgpu::TextureDescriptor {
-                label: Some(label),
-                size: wgpu::Extent3d {
-                    width: size.0,
-                    height: size.1,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format,
-                usage: wgpu::TextureUsages::STORAGE_BINDING
-                    | wgpu::TextureUsages::TEXTURE_BINDING
-                    | wgpu::TextureUsages::COPY_SRC,
-                view_formats: &[],
-            })
-        };
+        use wgpu::TextureUsages as U;
+        let usage = U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC;
+        let make = |label, format| crate::gpu::texture_2d(&self.device, label, size, format, usage);
         let march = make("nimbus clouds (L, T)", F::Rgba16Float);
         let cloud_depth = make("nimbus cloud depth", F::R32Float);
         self.sized = Some(SizedTextures {

@@ -33,6 +33,24 @@ fn format_of(format: u32) -> FfiResult<(wgpu::TextureFormat, u32)> {
     })
 }
 
+/// The texture behind `tex`, once `data` is non-NULL and `size` is the texture's byte size.
+///
+/// # Safety
+/// `tex` must be NULL or a live texture.
+unsafe fn checked<'a>(
+    tex: *const NimbusTexture,
+    data_is_null: bool,
+    size: usize,
+) -> FfiResult<&'a NimbusTexture> {
+    // SAFETY: checked for NULL; the caller guarantees validity.
+    let tex = unsafe { tex.as_ref() }.ok_or_else(|| FfiError::null("tex"))?;
+    if data_is_null {
+        return Err(FfiError::null("data"));
+    }
+    tex.check_size(size)?;
+    Ok(tex)
+}
+
 impl NimbusTexture {
     fn byte_size(&self) -> usize {
         (self.texture.width() * self.texture.height() * self.bytes_per_pixel) as usize
@@ -90,20 +108,13 @@ pub unsafe extern "C" fn nimbus_texture_create(
             }
             let device = inner.device.clone();
             let texture = crate::renderer::gpu_scope(&device, || {
-                device.create_texture(&wgpu::TextureDescriptor {
-                    label: Some("nimbus host texture"),
-                    size: wgpu::Extent3d {
-                        width: desc.width,
-                        height: desc.height,
-                        depth_or_array_layers: 1,
-                    },
-                    mip_level_count: 1,
-                    sample_count: 1,
-                    dimension: wgpu::TextureDimension::D2,
+                crate::gpu::texture_2d(
+                    &device,
+                    "nimbus host texture",
+                    (desc.width, desc.height),
                     format,
                     usage,
-                    view_formats: &[],
-                })
+                )
             })?;
             let tex = NimbusTexture {
                 view: texture.create_view(&Default::default()),
@@ -131,12 +142,8 @@ pub unsafe extern "C" fn nimbus_texture_write(
 ) -> i32 {
     boundary(
         || {
-            // SAFETY: checked for NULL; the caller guarantees validity.
-            let tex = unsafe { tex.as_ref() }.ok_or_else(|| FfiError::null("tex"))?;
-            if data.is_null() {
-                return Err(FfiError::null("data"));
-            }
-            tex.check_size(size)?;
+            // SAFETY: `tex` is NULL or live per the caller's contract.
+            let tex = unsafe { checked(tex, data.is_null(), size) }?;
             // SAFETY: `data` points to `size` readable bytes per the caller's contract.
             let bytes = unsafe { std::slice::from_raw_parts(data.cast::<u8>(), size) };
             let (w, h) = (tex.texture.width(), tex.texture.height());
@@ -173,12 +180,8 @@ pub unsafe extern "C" fn nimbus_texture_read(
 ) -> i32 {
     boundary(
         || {
-            // SAFETY: checked for NULL; the caller guarantees validity.
-            let tex = unsafe { tex.as_ref() }.ok_or_else(|| FfiError::null("tex"))?;
-            if data.is_null() {
-                return Err(FfiError::null("data"));
-            }
-            tex.check_size(size)?;
+            // SAFETY: `tex` is NULL or live per the caller's contract.
+            let tex = unsafe { checked(tex, data.is_null(), size) }?;
             let bytes = read_texture(&tex.device, &tex.queue, &tex.texture, 0)?;
             // SAFETY: `data` has room for `size` == bytes.len() bytes per the caller's contract.
             unsafe { std::ptr::copy_nonoverlapping(bytes.as_ptr(), data.cast::<u8>(), size) };

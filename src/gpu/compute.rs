@@ -67,20 +67,12 @@ pub(crate) fn dispatch(
 
 /// A 2D RGBA8 texture usable as storage, sampled texture and copy source.
 pub(crate) fn map_texture(device: &wgpu::Device, label: &str, size: u32) -> wgpu::Texture {
-    device.create_texture(&wgpu::TextureDescriptor {
-        label: Some(label),
-        size: wgpu::Extent3d {
-            width: size,
-            height: size,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: wgpu::TextureFormat::Rgba8Unorm,
-        usage: wgpu::TextureUsages::TEXTURE_BINDING
-            | wgpu::TextureUsages::STORAGE_BINDING
-            | wgpu::TextureUsages::COPY_SRC,
-        view_formats: &[],
-    })
+    use wgpu::TextureUsages as U;
+    super::texture_2d(
+        device,
+        label,
+        (size, size),
+        wgpu::TextureFormat::Rgba8Unorm,
+        U::TEXTURE_BINDING | U::STORAGE_BINDING | U::COPY_SRC,
+    )
 }
