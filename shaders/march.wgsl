@@ -22,7 +22,7 @@ struct MarchUniforms {
     debug: vec4f,           // slab bottom, slab top, debug density, unused
     debug_sphere: vec4f,    // sphere center xyz, radius
     tangent_x: vec4f,       // world-space horizontal axis for the weather map, w: frame index
-    tangent_z: vec4f,       // second horizontal axis, w: unused
+    tangent_z: vec4f,       // second horizontal axis, w: trace resolution divisor (1, 2, 4)
     layer_types: vec4f,     // cloud type of layers 1-3, w: weight of the "to" weather map
     horizon: vec4f,         // horizon gradient: strength, start distance (m), coverage, type
     cirrus: vec4f,          // high layer: coverage, altitude (m), optical depth, unused
@@ -35,9 +35,10 @@ struct MarchUniforms {
 @group(0) @binding(3) var weather_from: texture_2d<f32>;
 @group(0) @binding(4) var blue_noise: texture_2d<f32>;
 @group(0) @binding(5) var noise_sampler: sampler;
-//!SCENE_DEPTH_BINDING
+//!SCENE_DEPTH_BINDING(6)
 @group(0) @binding(7) var march_out: texture_storage_2d<rgba16float, write>;
-@group(0) @binding(8) var depth_out: texture_storage_2d<r32float, write>;
+// r: representative cloud depth (m, 0 = no cloud), g: the scene distance the ray was clipped at.
+@group(0) @binding(8) var depth_out: texture_storage_2d<rg32float, write>;
 @group(0) @binding(9) var weather_to: texture_2d<f32>;
 
 const DEBUG_OFF: u32 = 0u;
@@ -50,18 +51,6 @@ fn debug_mode() -> u32 {
 
 fn unproject(ndc: vec2f, depth: f32) -> vec4f {
     return u.inv_view_proj * vec4f(ndc, depth, 1.0);
-}
-
-// Distance from the camera to the scene point behind this pixel (mirrors frame::scene_distance).
-fn scene_distance(ndc: vec2f, depth: f32) -> f32 {
-    if (depth == u.sun_color.w) {
-        return 3.0e38;
-    }
-    let p = unproject(ndc, depth);
-    if (abs(p.w) < 1e-20) {
-        return 3.0e38;
-    }
-    return length(p.xyz / p.w - u.camera.xyz);
 }
 
 fn horizontal_of(p: vec3f) -> vec2f {
@@ -210,17 +199,21 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
     if (any(id.xy >= dims)) {
         return;
     }
-    let ndc = vec2f(
-        (f32(id.x) + 0.5) / f32(dims.x) * 2.0 - 1.0,
-        1.0 - (f32(id.y) + 0.5) / f32(dims.y) * 2.0,
-    );
+    let ndc = pixel_ndc(id.xy, dims);
     let cam = u.camera.xyz;
     let near_p = unproject(ndc, u.camera.w);
     let dir = normalize(near_p.xyz / near_p.w - cam);
 
+    // At reduced resolution a traced pixel stands for a block of scene pixels: it reads the
+    // scene depth at the block's center; the composite's upsample handles the edges.
     var max_t = u.layer.w;
+    var scene_t = NO_SCENE;
     if (u.misc.w > 0.5) {
-        max_t = min(max_t, scene_distance(ndc, load_scene_depth(id.xy)));
+        let scale = u32(u.tangent_z.w);
+        let full = textureDimensions(scene_depth);
+        let at = min(id.xy * scale + vec2u(scale / 2u), full - vec2u(1u));
+        scene_t = scene_distance_at(u.inv_view_proj, cam, u.sun_color.w, ndc, load_scene_depth(at));
+        max_t = min(max_t, scene_t);
     }
 
     let up = u.planet.xyz;
@@ -331,5 +324,5 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
         }
     }
     textureStore(march_out, id.xy, vec4f(radiance, transmittance));
-    textureStore(depth_out, id.xy, vec4f(cloud_depth));
+    textureStore(depth_out, id.xy, vec4f(cloud_depth, scene_t, 0.0, 0.0));
 }

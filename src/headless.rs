@@ -348,7 +348,8 @@ impl Headless {
         )?))
     }
 
-    /// The last march result: rgb = in-scattered radiance L, a = transmittance T.
+    /// The last march result at the trace resolution: rgb = in-scattered radiance L,
+    /// a = transmittance T.
     pub fn read_clouds(&self) -> Result<Vec<[f32; 4]>> {
         let (march, _) = self
             .renderer
@@ -362,14 +363,17 @@ impl Headless {
         )?))
     }
 
-    /// The last frame's representative cloud depth in meters (0 where there is no cloud).
+    /// The last frame's representative cloud depth in meters (0 where there is no cloud), at
+    /// the trace resolution.
     pub fn read_cloud_depth(&self) -> Result<Vec<f32>> {
         let (_, depth) = self
             .renderer
             .march_textures()
             .ok_or_else(|| invalid_target("output", "nothing rendered yet"))?;
         let bytes = read_texture(&self.device, &self.queue, depth, 0)?;
-        Ok(bytemuck::pod_collect_to_vec(&bytes))
+        // RG32F: cloud depth, then the scene distance the ray was clipped at.
+        let rg: Vec<f32> = bytemuck::pod_collect_to_vec(&bytes);
+        Ok(rg.chunks_exact(2).map(|p| p[0]).collect())
     }
 
     /// One mip level of a baked noise volume, RGBA8, x fastest then y then z.

@@ -8,7 +8,7 @@ use wgpu::TextureFormat as F;
 
 use crate::error::{invalid_target, Error, Result};
 use crate::frame::FrameInputs;
-use crate::gpu::composite::CompositeCache;
+use crate::gpu::composite::{CompositeCache, CompositeInputs, CompositeUniforms};
 use crate::gpu::march::{MarchPipeline, MarchUniforms};
 use crate::gpu::noise::{NoiseTextures, NoiseVolume};
 use crate::gpu::shaders::DepthKind;
@@ -68,7 +68,8 @@ pub struct Targets<'a> {
 }
 
 struct SizedTextures {
-    size: (u32, u32),
+    /// Output size and trace divisor these were made for.
+    key: ((u32, u32), u32),
     march_view: wgpu::TextureView,
     cloud_depth_view: wgpu::TextureView,
     /// Kept so the readback helpers can copy them.
@@ -89,9 +90,10 @@ pub struct Renderer {
     march_r32: MarchPipeline,
     composite: CompositeCache,
     uniforms: wgpu::Buffer,
+    composite_uniforms: wgpu::Buffer,
     no_depth: wgpu::TextureView,
     sized: Option<SizedTextures>,
-    pending: Option<MarchUniforms>,
+    pending: Option<(MarchUniforms, CompositeUniforms)>,
     frame_index: u32,
 }
 
@@ -248,6 +250,12 @@ impl Renderer {
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
+            let composite_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("nimbus composite uniforms"),
+                size: std::mem::size_of::<CompositeUniforms>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
             let no_depth = crate::gpu::texture_2d(
                 device,
                 "nimbus no scene depth",
@@ -268,6 +276,7 @@ impl Renderer {
                 settings,
                 noise,
                 uniforms,
+                composite_uniforms,
                 no_depth,
                 sized: None,
                 pending: None,
@@ -343,7 +352,7 @@ impl Renderer {
         let (camera, sun_dir) = frame.validate()?;
         let sample = self.timeline.sample(frame.time);
         self.last_time = frame.time;
-        self.pending = Some(MarchUniforms::new(
+        let march = MarchUniforms::new(
             &self.settings,
             &sample,
             frame,
@@ -351,21 +360,33 @@ impl Renderer {
             sun_dir,
             self.frame_index,
             false,
-        ));
+        );
+        let composite = CompositeUniforms::new(
+            camera.inv_view_proj,
+            camera.position,
+            frame.camera.depth.far_value(),
+            self.settings.march.resolution.divisor(),
+            false,
+        );
+        self.pending = Some((march, composite));
         Ok(())
     }
 
     /// Records the march and composite passes into `encoder`. Submits nothing: the host
     /// submits the encoder. One `encode` per `prepare`.
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder, targets: &Targets) -> Result<()> {
-        let mut uniforms = self.pending.ok_or(Error::NotPrepared)?;
+        let (mut uniforms, mut composite) = self.pending.ok_or(Error::NotPrepared)?;
         let checked = check_targets(targets)?;
-        uniforms.set_has_depth(targets.depth.is_some());
+        let has_depth = targets.depth.is_some();
+        uniforms.set_has_depth(has_depth);
+        composite.set_has_depth(has_depth);
         let device = self.device.clone();
         gpu_scope(&device, || {
             self.ensure_size(checked.size);
             self.queue
                 .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
+            self.queue
+                .write_buffer(&self.composite_uniforms, 0, bytemuck::bytes_of(&composite));
             let sized = self
                 .sized
                 .as_ref()
@@ -374,25 +395,34 @@ impl Renderer {
                 DepthKind::Depth => &self.march_depth,
                 DepthKind::R32Float => &self.march_r32,
             };
+            let scene_depth = targets.depth.unwrap_or(&self.no_depth);
+            let trace_size = (sized.march.width(), sized.march.height());
             march.record(
                 &device,
                 encoder,
                 &self.uniforms,
                 &self.noise,
                 self.weather_maps.views(),
-                targets.depth.unwrap_or(&self.no_depth),
+                scene_depth,
                 &sized.march_view,
                 &sized.cloud_depth_view,
-                checked.size,
+                trace_size,
             );
             let (scene, output) = match targets.color {
                 ColorTargets::InPlace(v) => (None, v),
                 ColorTargets::Separate { scene, output } => (Some(scene), output),
             };
+            let inputs = CompositeInputs {
+                clouds: &sized.march_view,
+                cloud_depth: &sized.cloud_depth_view,
+                scene_depth,
+                depth_kind: checked.depth_kind,
+                uniforms: &self.composite_uniforms,
+            };
             self.composite.record(
                 &device,
                 encoder,
-                &sized.march_view,
+                &inputs,
                 scene,
                 output,
                 checked.output_format,
@@ -402,18 +432,26 @@ impl Renderer {
         Ok(())
     }
 
-    /// (Re)creates the internal per-size textures: only when the target size changes.
+    /// (Re)creates the internal per-size textures: only when the target size or the trace
+    /// resolution changes.
     fn ensure_size(&mut self, size: (u32, u32)) {
-        if self.sized.as_ref().is_some_and(|s| s.size == size) {
+        let divisor = self.settings.march.resolution.divisor();
+        if self
+            .sized
+            .as_ref()
+            .is_some_and(|s| s.key == (size, divisor))
+        {
             return;
         }
+        let trace = (size.0.div_ceil(divisor), size.1.div_ceil(divisor));
         use wgpu::TextureUsages as U;
         let usage = U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC;
-        let make = |label, format| crate::gpu::texture_2d(&self.device, label, size, format, usage);
+        let make =
+            |label, format| crate::gpu::texture_2d(&self.device, label, trace, format, usage);
         let march = make("nimbus clouds (L, T)", F::Rgba16Float);
-        let cloud_depth = make("nimbus cloud depth", F::R32Float);
+        let cloud_depth = make("nimbus cloud depth", F::Rg32Float);
         self.sized = Some(SizedTextures {
-            size,
+            key: (size, divisor),
             march_view: march.create_view(&Default::default()),
             cloud_depth_view: cloud_depth.create_view(&Default::default()),
             march,

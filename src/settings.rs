@@ -101,6 +101,65 @@ pub struct March {
     pub transmittance_cutoff: f32,
     /// Blue-noise jitter of the ray start (against banding). Default true.
     pub jitter: bool,
+    /// Resolution the clouds are traced at; the composite upsamples depth-aware.
+    /// Default full.
+    pub resolution: TraceResolution,
+}
+
+/// Resolution of the cloud march relative to the output.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum TraceResolution {
+    /// One ray per output pixel.
+    #[default]
+    Full,
+    /// One ray per 2×2 output pixels.
+    Half,
+    /// One ray per 4×4 output pixels.
+    Quarter,
+}
+
+impl TraceResolution {
+    /// Output pixels per traced pixel along each axis.
+    pub fn divisor(self) -> u32 {
+        match self {
+            TraceResolution::Full => 1,
+            TraceResolution::Half => 2,
+            TraceResolution::Quarter => 4,
+        }
+    }
+}
+
+/// Quality levels: what each trades is written next to it; `docs/performance.md` has their
+/// measured cost and error.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Quality {
+    /// Quarter-resolution trace, 32-64 march steps, 4 light steps.
+    Low,
+    /// Half-resolution trace, 40-80 march steps, 5 light steps.
+    Medium,
+    /// Half-resolution trace, 48-96 march steps, 6 light steps.
+    High,
+    /// Full-resolution trace, 64-128 march steps, 8 light steps.
+    Ultra,
+}
+
+impl Quality {
+    /// All levels, cheapest first.
+    pub const ALL: [Quality; 4] = [Quality::Low, Quality::Medium, Quality::High, Quality::Ultra];
+
+    /// Sets the march budget, light steps and trace resolution of `settings`.
+    pub fn apply(self, settings: &mut Settings) {
+        let (resolution, min, max, light) = match self {
+            Quality::Low => (TraceResolution::Quarter, 32, 64, 4),
+            Quality::Medium => (TraceResolution::Half, 40, 80, 5),
+            Quality::High => (TraceResolution::Half, 48, 96, 6),
+            Quality::Ultra => (TraceResolution::Full, 64, 128, 8),
+        };
+        settings.march.resolution = resolution;
+        settings.march.min_steps = min;
+        settings.march.max_steps = max;
+        settings.lighting.light_steps = light;
+    }
 }
 
 /// Distant clouds fade into a haze color (aerial perspective).
@@ -195,6 +254,7 @@ impl Default for March {
             max_distance: 120_000.0,
             transmittance_cutoff: 0.01,
             jitter: true,
+            resolution: TraceResolution::Full,
         }
     }
 }

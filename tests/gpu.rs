@@ -661,3 +661,54 @@ fn renderer_refuses_bad_targets_and_turns_wgpu_errors_into_errors() {
     };
     r.set_settings(s).unwrap();
 }
+
+// ---- reduced-resolution tracing ----------------------------------------------------------------
+
+#[test]
+fn reduced_resolution_keeps_occluders_exact_and_stays_close_to_full() {
+    use nimbus::settings::TraceResolution;
+    let render = |resolution| {
+        let mut settings = small_noise(1);
+        settings.march.jitter = false;
+        settings.march.resolution = resolution;
+        let mut h = headless(settings);
+        let mut view = standard_views()[4]; // mountains: a ridge in front of the clouds
+        view.occluder = Occluder::NearWall {
+            distance: 400.0,
+            fraction: 0.3,
+        };
+        let scene = view.scene(W, H);
+        h.upload_scene(&scene.color, Some(&scene.depth)).unwrap();
+        h.render(&view.frame(W, H, 0.0)).unwrap();
+        (scene, h.read_output().unwrap())
+    };
+    let (scene, full) = render(TraceResolution::Full);
+    for resolution in [TraceResolution::Half, TraceResolution::Quarter] {
+        let (_, out) = render(resolution);
+        assert!(
+            out.iter().flatten().all(|v| v.is_finite()),
+            "{resolution:?}: NaN"
+        );
+        let mut diff = 0.0f64;
+        for ((got, want), (depth, color)) in out
+            .iter()
+            .zip(&full)
+            .zip(scene.depth.iter().zip(&scene.color))
+        {
+            if *depth < 1.0 {
+                // The wall is 400 m away, in front of every cloud: exactly the scene.
+                assert_eq!(
+                    *got,
+                    color.map(f16),
+                    "{resolution:?}: an occluded pixel changed"
+                );
+            }
+            diff += (0..3).map(|c| (got[c] - want[c]).abs() as f64).sum::<f64>() / 3.0;
+        }
+        let mean = diff / full.len() as f64;
+        assert!(
+            mean < 0.03,
+            "{resolution:?}: mean difference from full resolution {mean}"
+        );
+    }
+}

@@ -1,20 +1,66 @@
-//! Composite pass: out = scene * T + L, as a fullscreen triangle. In place, the blend unit does
-//! the multiply-add on the host's color; otherwise the shader reads the scene and writes the
-//! output. Pipelines are cached per (output format, in place) on first use.
+//! Composite pass: out = scene * T + L, as a fullscreen triangle, with a depth-aware upsample
+//! from the trace resolution. In place, the blend unit does the multiply-add on the host's
+//! color; otherwise the shader reads the scene and writes the output. Pipelines are cached per
+//! (output format, in place, scene-depth kind) on first use.
 
 use std::collections::HashMap;
 
+use bytemuck::{Pod, Zeroable};
+use glam::Mat4;
+
 use super::shaders::{pass_source, DepthKind};
+
+/// Layout must match `CompositeUniforms` in shaders/composite.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub(crate) struct CompositeUniforms {
+    inv_view_proj: [f32; 16],
+    camera: [f32; 4],
+    params: [f32; 4],
+}
+
+impl CompositeUniforms {
+    pub(crate) fn new(
+        inv_view_proj: Mat4,
+        camera: glam::Vec3,
+        far_value: f32,
+        divisor: u32,
+        has_depth: bool,
+    ) -> Self {
+        Self {
+            inv_view_proj: inv_view_proj.to_cols_array(),
+            camera: camera.extend(far_value).to_array(),
+            params: [divisor as f32, if has_depth { 1.0 } else { 0.0 }, 0.0, 0.0],
+        }
+    }
+}
+
+impl CompositeUniforms {
+    /// Whether a scene depth is bound (known only once targets are given).
+    pub(crate) fn set_has_depth(&mut self, has_depth: bool) {
+        self.params[1] = if has_depth { 1.0 } else { 0.0 };
+    }
+}
+
+/// The views the composite reads.
+pub(crate) struct CompositeInputs<'a> {
+    pub clouds: &'a wgpu::TextureView,
+    pub cloud_depth: &'a wgpu::TextureView,
+    pub scene_depth: &'a wgpu::TextureView,
+    pub depth_kind: DepthKind,
+    pub uniforms: &'a wgpu::Buffer,
+}
 
 #[derive(Default)]
 pub(crate) struct CompositeCache {
-    pipelines: HashMap<(wgpu::TextureFormat, bool), wgpu::RenderPipeline>,
+    pipelines: HashMap<(wgpu::TextureFormat, bool, DepthKind), wgpu::RenderPipeline>,
 }
 
 fn build(
     device: &wgpu::Device,
     format: wgpu::TextureFormat,
     in_place: bool,
+    depth: DepthKind,
 ) -> wgpu::RenderPipeline {
     let (pass, entry) = if in_place {
         ("composite_in_place", "fs_in_place")
@@ -23,7 +69,7 @@ fn build(
     };
     let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
         label: Some(pass),
-        source: wgpu::ShaderSource::Wgsl(pass_source(pass, DepthKind::Depth).into()),
+        source: wgpu::ShaderSource::Wgsl(pass_source(pass, depth).into()),
     });
     // scene * T + L: src = (L, T), dst = scene; color = src * 1 + dst * src.alpha, alpha kept.
     let blend = in_place.then_some(wgpu::BlendState {
@@ -71,7 +117,7 @@ impl CompositeCache {
         &mut self,
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
-        clouds: &wgpu::TextureView,
+        inputs: &CompositeInputs,
         scene: Option<&wgpu::TextureView>,
         output: &wgpu::TextureView,
         format: wgpu::TextureFormat,
@@ -79,17 +125,23 @@ impl CompositeCache {
         let in_place = scene.is_none();
         let pipeline = self
             .pipelines
-            .entry((format, in_place))
-            .or_insert_with(|| build(device, format, in_place));
-        let mut entries = vec![wgpu::BindGroupEntry {
-            binding: 0,
-            resource: wgpu::BindingResource::TextureView(clouds),
-        }];
+            .entry((format, in_place, inputs.depth_kind))
+            .or_insert_with(|| build(device, format, in_place, inputs.depth_kind));
+        let tex = |binding, view| wgpu::BindGroupEntry {
+            binding,
+            resource: wgpu::BindingResource::TextureView(view),
+        };
+        let mut entries = vec![
+            tex(0, inputs.clouds),
+            tex(2, inputs.cloud_depth),
+            wgpu::BindGroupEntry {
+                binding: 3,
+                resource: inputs.uniforms.as_entire_binding(),
+            },
+            tex(4, inputs.scene_depth),
+        ];
         if let Some(scene) = scene {
-            entries.push(wgpu::BindGroupEntry {
-                binding: 1,
-                resource: wgpu::BindingResource::TextureView(scene),
-            });
+            entries.push(tex(1, scene));
         }
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("nimbus composite"),
@@ -117,7 +169,7 @@ impl CompositeCache {
         pass.draw(0..3, 0..1);
     }
 
-    /// How many pipelines have been built (one per format and mode used).
+    /// How many pipelines have been built (one per output format, mode and depth kind used).
     pub(crate) fn len(&self) -> usize {
         self.pipelines.len()
     }

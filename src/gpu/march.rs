@@ -162,7 +162,7 @@ impl MarchUniforms {
             debug,
             debug_sphere: sphere,
             tangent_x: v4(tx, (frame_index % 1024) as f32),
-            tangent_z: v4(tz, 0.0),
+            tangent_z: v4(tz, s.march.resolution.divisor() as f32),
             layer_types: types,
             horizon: [
                 w.horizon.strength,
@@ -259,7 +259,7 @@ impl MarchPipeline {
                 },
                 texture_entry(6, depth_type, D::D2),
                 storage_entry(7, wgpu::TextureFormat::Rgba16Float),
-                storage_entry(8, wgpu::TextureFormat::R32Float),
+                storage_entry(8, wgpu::TextureFormat::Rg32Float),
                 texture_entry(9, filterable, D::D2),
             ],
         });

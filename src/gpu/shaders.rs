@@ -17,6 +17,7 @@ macro_rules! shader {
 }
 
 pub(crate) const COMMON: (&str, &str) = shader!("common.wgsl");
+pub(crate) const DEPTH: (&str, &str) = shader!("depth.wgsl");
 pub(crate) const NOISE: (&str, &str) = shader!("noise.wgsl");
 pub(crate) const ATMOSPHERE: (&str, &str) = shader!("atmosphere.wgsl");
 pub(crate) const PHASE: (&str, &str) = shader!("phase.wgsl");
@@ -35,27 +36,32 @@ pub(crate) const PASSES: &[(&str, &[(&str, &str)])] = &[
     ("weather_bake", &[COMMON, NOISE, WEATHER_BAKE]),
     ("weather_blend", &[WEATHER_BLEND]),
     ("mip_downsample", &[MIP_DOWNSAMPLE]),
-    ("march", &[COMMON, ATMOSPHERE, PHASE, DENSITY, MARCH]),
-    ("composite_in_place", &[COMPOSITE]),
-    ("composite_separate", &[COMPOSITE, COMPOSITE_SEPARATE]),
+    ("march", &[COMMON, DEPTH, ATMOSPHERE, PHASE, DENSITY, MARCH]),
+    ("composite_in_place", &[DEPTH, COMPOSITE]),
+    (
+        "composite_separate",
+        &[DEPTH, COMPOSITE, COMPOSITE_SEPARATE],
+    ),
 ];
 
-const DEPTH_PLACEHOLDER: &str = "//!SCENE_DEPTH_BINDING";
+const DEPTH_PLACEHOLDER: &str = "//!SCENE_DEPTH_BINDING(";
 
-fn depth_binding(kind: DepthKind) -> &'static str {
+/// The scene-depth binding (at `binding`) and its loader for a depth kind.
+fn depth_binding(kind: DepthKind, binding: &str) -> String {
     match kind {
-        DepthKind::Depth => {
-            "@group(0) @binding(6) var scene_depth: texture_depth_2d;\n\
-             fn load_scene_depth(c: vec2u) -> f32 { return textureLoad(scene_depth, c, 0); }"
-        }
-        DepthKind::R32Float => {
-            "@group(0) @binding(6) var scene_depth: texture_2d<f32>;\n\
-             fn load_scene_depth(c: vec2u) -> f32 { return textureLoad(scene_depth, c, 0).r; }"
-        }
+        DepthKind::Depth => format!(
+            "@group(0) @binding({binding}) var scene_depth: texture_depth_2d;\n\
+             fn load_scene_depth(c: vec2u) -> f32 {{ return textureLoad(scene_depth, c, 0); }}"
+        ),
+        DepthKind::R32Float => format!(
+            "@group(0) @binding({binding}) var scene_depth: texture_2d<f32>;\n\
+             fn load_scene_depth(c: vec2u) -> f32 {{ return textureLoad(scene_depth, c, 0).r; }}"
+        ),
     }
 }
 
-/// The full source of a pass; the march pass gets its scene-depth binding variant.
+/// The full source of a pass, its scene-depth placeholder (`//!SCENE_DEPTH_BINDING(n)`)
+/// replaced by the binding variant for `depth`.
 pub(crate) fn pass_source(pass: &str, depth: DepthKind) -> String {
     let modules = PASSES
         .iter()
@@ -68,7 +74,16 @@ pub(crate) fn pass_source(pass: &str, depth: DepthKind) -> String {
         src.push_str(text);
         src.push('\n');
     }
-    src.replace(DEPTH_PLACEHOLDER, depth_binding(depth))
+    while let Some(at) = src.find(DEPTH_PLACEHOLDER) {
+        let rest = &src[at + DEPTH_PLACEHOLDER.len()..];
+        let close = rest
+            .find(')')
+            .unwrap_or_else(|| unreachable!("placeholder without `)`"));
+        let binding = rest[..close].to_string();
+        let end = at + DEPTH_PLACEHOLDER.len() + close + 1;
+        src.replace_range(at..end, &depth_binding(depth, &binding));
+    }
+    src
 }
 
 #[cfg(test)]
@@ -115,7 +130,7 @@ mod tests {
 
     #[test]
     fn self_contained_modules_validate_alone() {
-        for (name, src) in [COMMON, MIP_DOWNSAMPLE, COMPOSITE, WEATHER_BLEND] {
+        for (name, src) in [COMMON, DEPTH, MIP_DOWNSAMPLE, WEATHER_BLEND] {
             validate(name, src);
         }
     }
