@@ -97,23 +97,29 @@ fn matrix_finite(field: &'static str, m: &Mat4) -> Result<()> {
 }
 
 fn invertible(field: &'static str, m: &Mat4) -> Result<Mat4> {
-    let det = m.determinant();
-    let inv = m.inverse();
-    // Scale-free test: the inverse must exist and round-trip to the identity.
-    let round_trip = (*m * inv - Mat4::IDENTITY)
+    // In f64: a view-projection with a far plane hundreds of km away is ill-conditioned in f32
+    // but perfectly usable. Scale-free test: the inverse must exist and round-trip to I.
+    let md = m.as_dmat4();
+    let det = md.determinant();
+    let inv = md.inverse();
+    let round_trip = (md * inv - glam::DMat4::IDENTITY)
         .to_cols_array()
         .iter()
-        .fold(0.0f32, |a, v| a.max(v.abs()));
+        .fold(0.0f64, |a, v| a.max(v.abs()));
     if det == 0.0
         || !det.is_finite()
         || !inv.is_finite()
         || round_trip.is_nan()
-        || round_trip >= 1e-3
+        || round_trip >= 1e-6
     {
         return Err(invalid_frame(
             field,
             format!("is not invertible (det {det}, |M M^-1 - I| = {round_trip})"),
         ));
+    }
+    let inv = inv.as_mat4();
+    if !inv.is_finite() {
+        return Err(invalid_frame(field, "inverse is not finite in f32"));
     }
     Ok(inv)
 }
@@ -404,6 +410,40 @@ mod tests {
         assert_eq!(field_of(cam.derive()), "camera.view");
         let ortho = Mat4::orthographic_rh(-1.0, 1.0, -1.0, 1.0, 0.1, 100.0);
         assert_eq!(field_of(camera(ortho, c).derive()), "camera.projection");
+    }
+
+    #[test]
+    fn far_planes_and_far_cameras_are_not_mistaken_for_singular() {
+        // The benchmark's flight camera: 400 km far plane, camera a few km from the origin.
+        // In f32 its view-projection round-trips only to 1e-3; it is a valid camera.
+        // Flight frame 4: eye (0, 2, 0) + (0, 40, -60) * 120.
+        let eye = Vec3::new(0.0, 4_802.0, -7_200.0);
+        let projection = Mat4::perspective_rh(75f32.to_radians(), 16.0 / 9.0, 1.0, 400_000.0);
+        let view = Mat4::look_at_rh(eye, eye + Vec3::new(0.0, 998.0, -1_200.0), Vec3::Y);
+        let vp = projection * view;
+        let f32_round_trip = (vp * vp.inverse() - Mat4::IDENTITY)
+            .to_cols_array()
+            .iter()
+            .fold(0.0f32, |a, v| a.max(v.abs()));
+        assert!(
+            f32_round_trip > 1e-4,
+            "this camera must be ill-conditioned in f32 ({f32_round_trip})"
+        );
+        let cam = Camera {
+            view,
+            projection,
+            depth: DepthConvention::default(),
+        };
+        cam.derive().unwrap();
+        for offset in [1e3f32, 1e4, 1e5] {
+            let eye = Vec3::new(offset, 3_000.0, -offset);
+            let far = Camera {
+                view: Mat4::look_at_rh(eye, eye + Vec3::new(0.3, 0.1, -1.0), Vec3::Y),
+                ..cam
+            };
+            far.derive()
+                .unwrap_or_else(|e| panic!("camera at {offset} m: {e}"));
+        }
     }
 
     #[test]

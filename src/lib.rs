@@ -37,6 +37,7 @@ pub mod weather;
 pub use error::{Error, Result};
 pub use frame::{Camera, DepthConvention, FrameInputs, Sun};
 pub use gpu::noise::NoiseVolume;
+pub use gpu::timing::PassTimes;
 pub use headless::Headless;
 pub use renderer::{ColorTargets, Renderer, Targets};
 pub use settings::{DebugDensity, Settings};

@@ -12,6 +12,7 @@ use crate::gpu::composite::{CompositeCache, CompositeInputs, CompositeUniforms};
 use crate::gpu::march::{MarchPipeline, MarchUniforms};
 use crate::gpu::noise::{NoiseTextures, NoiseVolume};
 use crate::gpu::shaders::DepthKind;
+use crate::gpu::timing::{GpuTimer, PassTimes};
 use crate::gpu::weather::WeatherMaps;
 use crate::settings::Settings;
 use crate::weather::{Timeline, Weather, WeatherSample};
@@ -94,6 +95,7 @@ pub struct Renderer {
     no_depth: wgpu::TextureView,
     sized: Option<SizedTextures>,
     pending: Option<(MarchUniforms, CompositeUniforms)>,
+    timer: Option<GpuTimer>,
     frame_index: u32,
 }
 
@@ -280,6 +282,7 @@ impl Renderer {
                 no_depth,
                 sized: None,
                 pending: None,
+                timer: None,
                 frame_index: 0,
             }
         })
@@ -407,6 +410,7 @@ impl Renderer {
                 &sized.march_view,
                 &sized.cloud_depth_view,
                 trace_size,
+                self.timer.as_ref(),
             );
             let (scene, output) = match targets.color {
                 ColorTargets::InPlace(v) => (None, v),
@@ -418,6 +422,7 @@ impl Renderer {
                 scene_depth,
                 depth_kind: checked.depth_kind,
                 uniforms: &self.composite_uniforms,
+                timer: self.timer.as_ref(),
             };
             self.composite.record(
                 &device,
@@ -427,6 +432,9 @@ impl Renderer {
                 output,
                 checked.output_format,
             );
+            if let Some(timer) = &self.timer {
+                timer.resolve(encoder);
+            }
         })?;
         self.frame_index = self.frame_index.wrapping_add(1);
         Ok(())
@@ -457,6 +465,45 @@ impl Renderer {
             march,
             cloud_depth,
         });
+    }
+
+    /// Records GPU timestamps around the march and composite passes from now on (for
+    /// benchmarks). Returns false when the device lacks `TIMESTAMP_QUERY` (request it when
+    /// creating the device; `Headless` does).
+    pub fn enable_gpu_timing(&mut self) -> bool {
+        if self.timer.is_none() {
+            self.timer = GpuTimer::new(&self.device, &self.queue);
+        }
+        self.timer.is_some()
+    }
+
+    /// The GPU time of each pass in the last submitted frame, once timing is enabled. Waits
+    /// for the GPU.
+    pub fn last_pass_times(&self) -> Result<Option<PassTimes>> {
+        self.timer
+            .as_ref()
+            .map(|t| t.read(&self.device))
+            .transpose()
+    }
+
+    /// Bytes of GPU memory Nimbus has allocated for textures and buffers (noise volumes with
+    /// their mips, weather maps, blue noise, per-size targets, uniforms).
+    pub fn gpu_memory_bytes(&self) -> u64 {
+        fn texture_bytes(t: &wgpu::Texture) -> u64 {
+            let bpp = t.format().block_copy_size(None).unwrap_or(4) as u64;
+            (0..t.mip_level_count())
+                .map(|m| {
+                    let s = t.size().mip_level_size(m, t.dimension());
+                    s.width as u64 * s.height as u64 * s.depth_or_array_layers as u64 * bpp
+                })
+                .sum()
+        }
+        let mut total =
+            self.noise.memory_bytes(texture_bytes) + self.weather_maps.memory_bytes(texture_bytes);
+        if let Some(s) = &self.sized {
+            total += texture_bytes(&s.march) + texture_bytes(&s.cloud_depth);
+        }
+        total + self.uniforms.size() + self.composite_uniforms.size()
     }
 
     /// Number of composite pipelines built so far (one per output format and mode).

@@ -49,6 +49,7 @@ pub(crate) struct CompositeInputs<'a> {
     pub scene_depth: &'a wgpu::TextureView,
     pub depth_kind: DepthKind,
     pub uniforms: &'a wgpu::Buffer,
+    pub timer: Option<&'a super::timing::GpuTimer>,
 }
 
 #[derive(Default)]
@@ -160,7 +161,14 @@ impl CompositeCache {
                 },
             })],
             depth_stencil_attachment: None,
-            timestamp_writes: None,
+            timestamp_writes: inputs.timer.map(|t| {
+                let (begin, end) = t.writes(true);
+                wgpu::RenderPassTimestampWrites {
+                    query_set: &t.query_set,
+                    beginning_of_pass_write_index: begin,
+                    end_of_pass_write_index: end,
+                }
+            }),
             occlusion_query_set: None,
             multiview_mask: None,
         });

@@ -296,6 +296,7 @@ impl MarchPipeline {
         march_out: &wgpu::TextureView,
         depth_out: &wgpu::TextureView,
         size: (u32, u32),
+        timer: Option<&super::timing::GpuTimer>,
     ) {
         let tex = |b, v| wgpu::BindGroupEntry {
             binding: b,
@@ -325,7 +326,14 @@ impl MarchPipeline {
         });
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("nimbus march"),
-            timestamp_writes: None,
+            timestamp_writes: timer.map(|t| {
+                let (begin, end) = t.writes(false);
+                wgpu::ComputePassTimestampWrites {
+                    query_set: &t.query_set,
+                    beginning_of_pass_write_index: begin,
+                    end_of_pass_write_index: end,
+                }
+            }),
         });
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &bind, &[]);

@@ -8,6 +8,7 @@ pub(crate) mod march;
 pub mod noise;
 pub(crate) mod readback;
 pub(crate) mod shaders;
+pub mod timing;
 pub(crate) mod weather;
 
 /// A single-mip 2D texture: the one descriptor Nimbus's 2D textures share.

@@ -153,6 +153,13 @@ impl NoiseTextures {
         }
     }
 
+    /// Bytes held, measured per texture by `texture_bytes`.
+    pub fn memory_bytes(&self, texture_bytes: impl Fn(&wgpu::Texture) -> u64) -> u64 {
+        texture_bytes(&self.base)
+            + texture_bytes(&self.detail)
+            + texture_bytes(self.blue_noise_view.texture())
+    }
+
     pub fn volume(&self, which: NoiseVolume) -> &wgpu::Texture {
         match which {
             NoiseVolume::Base => &self.base,

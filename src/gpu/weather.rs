@@ -140,6 +140,11 @@ impl WeatherMaps {
         queue.submit([encoder.finish()]);
     }
 
+    /// Bytes held, measured per texture by `texture_bytes`.
+    pub fn memory_bytes(&self, texture_bytes: impl Fn(&wgpu::Texture) -> u64) -> u64 {
+        self.textures.iter().map(texture_bytes).sum()
+    }
+
     /// (from, to) views for the march.
     pub fn views(&self) -> (&wgpu::TextureView, &wgpu::TextureView) {
         (&self.views[self.from], &self.views[self.to])

@@ -1,0 +1,93 @@
+//! GPU time of the march and composite passes from timestamp queries (benchmarks only; never
+//! in pass/fail tests). Lavapipe has timestamps, but cross-check them with wall time.
+
+use crate::error::{Error, Result};
+
+/// Milliseconds each pass took on the GPU in the last timed frame.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PassTimes {
+    /// The ray-march compute pass.
+    pub march_ms: f64,
+    /// The composite (upsample + blend) render pass.
+    pub composite_ms: f64,
+}
+
+pub(crate) struct GpuTimer {
+    pub query_set: wgpu::QuerySet,
+    resolve: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    period_ns: f32,
+}
+
+const QUERIES: u32 = 4;
+
+impl GpuTimer {
+    /// A timer, or `None` when the device lacks `TIMESTAMP_QUERY`.
+    pub fn new(device: &wgpu::Device, queue: &wgpu::Queue) -> Option<Self> {
+        if !device.features().contains(wgpu::Features::TIMESTAMP_QUERY) {
+            return None;
+        }
+        let size = (QUERIES as u64) * 8;
+        Some(Self {
+            query_set: device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("nimbus pass timestamps"),
+                ty: wgpu::QueryType::Timestamp,
+                count: QUERIES,
+            }),
+            resolve: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("nimbus timestamp resolve"),
+                size,
+                usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+                mapped_at_creation: false,
+            }),
+            readback: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("nimbus timestamp readback"),
+                size,
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            period_ns: queue.get_timestamp_period(),
+        })
+    }
+
+    /// Timestamp writes for the march (queries 0, 1) or the composite (2, 3).
+    pub fn writes(&self, composite: bool) -> (Option<u32>, Option<u32>) {
+        let base = if composite { 2 } else { 0 };
+        (Some(base), Some(base + 1))
+    }
+
+    /// Records copying the timestamps where `read` can map them.
+    pub fn resolve(&self, encoder: &mut wgpu::CommandEncoder) {
+        encoder.resolve_query_set(&self.query_set, 0..QUERIES, &self.resolve, 0);
+        encoder.copy_buffer_to_buffer(&self.resolve, 0, &self.readback, 0, None);
+    }
+
+    /// The pass times of the last submitted frame (waits for the GPU).
+    pub fn read(&self, device: &wgpu::Device) -> Result<PassTimes> {
+        let (tx, rx) = std::sync::mpsc::channel();
+        self.readback
+            .slice(..)
+            .map_async(wgpu::MapMode::Read, move |r| drop(tx.send(r)));
+        device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| Error::Readback(e.to_string()))?;
+        rx.recv()
+            .map_err(|e| Error::Readback(e.to_string()))?
+            .map_err(|e| Error::Readback(e.to_string()))?;
+        let ticks: Vec<u64> = {
+            let view = self
+                .readback
+                .get_mapped_range(..)
+                .map_err(|e| Error::Readback(e.to_string()))?;
+            bytemuck::pod_collect_to_vec(&view)
+        };
+        self.readback.unmap();
+        let ms = |a: usize, b: usize| {
+            ticks[b].saturating_sub(ticks[a]) as f64 * self.period_ns as f64 * 1e-6
+        };
+        Ok(PassTimes {
+            march_ms: ms(0, 1),
+            composite_ms: ms(2, 3),
+        })
+    }
+}
