@@ -47,6 +47,16 @@ pub(crate) fn read_texture(
         size,
     );
     queue.submit([encoder.finish()]);
+    let mapped = map_read(device, &buffer)?;
+    let mut out = Vec::with_capacity((row * size.height * layers) as usize);
+    for chunk in mapped.chunks(padded as usize) {
+        out.extend_from_slice(&chunk[..row as usize]);
+    }
+    Ok(out)
+}
+
+/// Waits for the GPU, maps a `MAP_READ` buffer and copies its contents out.
+pub(crate) fn map_read(device: &wgpu::Device, buffer: &wgpu::Buffer) -> Result<Vec<u8>> {
     let (tx, rx) = std::sync::mpsc::channel();
     buffer
         .slice(..)
@@ -57,14 +67,10 @@ pub(crate) fn read_texture(
     rx.recv()
         .map_err(|e| Error::Readback(e.to_string()))?
         .map_err(|e| Error::Readback(e.to_string()))?;
-    let mapped = buffer
+    let bytes = buffer
         .get_mapped_range(..)
-        .map_err(|e| Error::Readback(e.to_string()))?;
-    let mut out = Vec::with_capacity((row * size.height * layers) as usize);
-    for chunk in mapped.chunks(padded as usize) {
-        out.extend_from_slice(&chunk[..row as usize]);
-    }
-    drop(mapped);
+        .map_err(|e| Error::Readback(e.to_string()))?
+        .to_vec();
     buffer.unmap();
-    Ok(out)
+    Ok(bytes)
 }

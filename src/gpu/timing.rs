@@ -1,7 +1,7 @@
 //! GPU time of the march and composite passes from timestamp queries (benchmarks only; never
 //! in pass/fail tests). Lavapipe has timestamps, but cross-check them with wall time.
 
-use crate::error::{Error, Result};
+use crate::error::Result;
 
 /// Milliseconds each pass took on the GPU in the last timed frame.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -64,24 +64,8 @@ impl GpuTimer {
 
     /// The pass times of the last submitted frame (waits for the GPU).
     pub fn read(&self, device: &wgpu::Device) -> Result<PassTimes> {
-        let (tx, rx) = std::sync::mpsc::channel();
-        self.readback
-            .slice(..)
-            .map_async(wgpu::MapMode::Read, move |r| drop(tx.send(r)));
-        device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| Error::Readback(e.to_string()))?;
-        rx.recv()
-            .map_err(|e| Error::Readback(e.to_string()))?
-            .map_err(|e| Error::Readback(e.to_string()))?;
-        let ticks: Vec<u64> = {
-            let view = self
-                .readback
-                .get_mapped_range(..)
-                .map_err(|e| Error::Readback(e.to_string()))?;
-            bytemuck::pod_collect_to_vec(&view)
-        };
-        self.readback.unmap();
+        let ticks: Vec<u64> =
+            bytemuck::pod_collect_to_vec(&super::readback::map_read(device, &self.readback)?);
         let ms = |a: usize, b: usize| {
             ticks[b].saturating_sub(ticks[a]) as f64 * self.period_ns as f64 * 1e-6
         };
