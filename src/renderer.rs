@@ -336,9 +336,11 @@ impl Renderer {
         let mut timeline = self.timeline.clone();
         let action = timeline.request(weather.clone(), start, duration)?;
         let (device, queue) = (self.device.clone(), self.queue.clone());
-        gpu_scope(&device, || {
+        let slots = gpu_scope(&device, || {
             self.weather_maps.apply(&device, &queue, action, &weather)
         })?;
+        // Only now, with the GPU work accepted, do the maps and the timeline move together.
+        self.weather_maps.commit(slots);
         self.timeline = timeline;
         Ok(())
     }

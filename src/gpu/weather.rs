@@ -97,23 +97,23 @@ impl WeatherMaps {
         queue.submit([encoder.finish()]);
     }
 
-    /// Carries out what the timeline decided for a request toward `target`.
+    /// Records and submits what the timeline decided for a request toward `target`, and
+    /// returns the new (from, to) slots. Nothing here changes until `commit` takes them, so a
+    /// failed request leaves the maps as they were.
     pub fn apply(
-        &mut self,
+        &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         action: MapAction,
         target: &Weather,
-    ) {
+    ) -> (usize, usize) {
         let spare = 3 - self.from - self.to;
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("nimbus weather transition"),
         });
-        match action {
-            MapAction::KeepFrom => {}
-            MapAction::ToBecomesFrom => {
-                (self.from, self.to) = (self.to, self.from);
-            }
+        let slots = match action {
+            MapAction::KeepFrom => (self.from, self.to),
+            MapAction::ToBecomesFrom => (self.to, self.from),
             MapAction::Bake(weight) => {
                 let params = BlendParams {
                     weight,
@@ -133,11 +133,17 @@ impl WeatherMaps {
                     self.groups(),
                 );
                 // The frozen blend is the new start; the old start's texture is free.
-                (self.from, self.to) = (spare, self.from);
+                (spare, self.from)
             }
-        }
-        self.generate(device, &mut encoder, self.to, target);
+        };
+        self.generate(device, &mut encoder, slots.1, target);
         queue.submit([encoder.finish()]);
+        slots
+    }
+
+    /// Makes `slots` (from `apply`) the current (from, to) maps.
+    pub fn commit(&mut self, slots: (usize, usize)) {
+        (self.from, self.to) = slots;
     }
 
     /// Bytes held, measured per texture by `texture_bytes`.
