@@ -3,7 +3,7 @@
 //! runs them, and compares the headless C program's PNG with a Rust render of the same view.
 
 mod common;
-use common::{f16, setup};
+use common::{f16, quiet, setup};
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -63,9 +63,7 @@ fn c_programs_pass_and_match_the_rust_render() {
         .expect("headless.png")
         .to_rgba8();
     assert_eq!(c_png.dimensions(), (w, h));
-    let mut settings = Settings::default();
-    settings.march.jitter = false;
-    let mut r = Headless::new(settings).unwrap();
+    let mut r = Headless::new(quiet(Settings::default())).unwrap();
     r.resize(w, h).unwrap();
     r.upload_scene(&vec![[0.2, 0.35, 0.7, 1.0]; (w * h) as usize], None)
         .unwrap();

@@ -12,7 +12,7 @@ use nimbus::{
 };
 
 mod common;
-use common::{f16, headless, setup, small_noise, H, W};
+use common::{f16, headless, quiet, setup, small_noise, H, W};
 
 fn render_view(h: &mut Headless, view: &DemoView) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
     let scene = view.scene(W, H);
@@ -237,9 +237,7 @@ fn pixels_nearer_than_the_clouds_are_unchanged() {
 
 #[test]
 fn in_place_composite_matches_separate_output() {
-    let mut settings = small_noise(1);
-    settings.march.jitter = false; // the jitter pattern rotates every frame
-    let mut h = headless(settings);
+    let mut h = headless(quiet(small_noise(1)));
     let view = standard_views()[0];
     let (_, separate) = render_view(&mut h, &view);
     h.set_in_place(true);
@@ -256,9 +254,7 @@ fn in_place_composite_matches_separate_output() {
 
 #[test]
 fn depth_conventions_see_the_same_clouds() {
-    let mut settings = small_noise(1);
-    settings.march.jitter = false; // the jitter pattern rotates every frame
-    let mut h = headless(settings);
+    let mut h = headless(quiet(small_noise(1)));
     let view = standard_views()[0];
     let scene = view.scene(W, H);
     h.upload_scene(&scene.color, None).unwrap();
@@ -668,8 +664,7 @@ fn renderer_refuses_bad_targets_and_turns_wgpu_errors_into_errors() {
 fn reduced_resolution_keeps_occluders_exact_and_stays_close_to_full() {
     use nimbus::settings::TraceResolution;
     let render = |resolution| {
-        let mut settings = small_noise(1);
-        settings.march.jitter = false;
+        let mut settings = quiet(small_noise(1));
         settings.march.resolution = resolution;
         let mut h = headless(settings);
         let mut view = standard_views()[4]; // mountains: a ridge in front of the clouds

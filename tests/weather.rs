@@ -2,16 +2,11 @@
 //! interrupted transition, every preset, the high layer and the horizon gradient.
 
 mod common;
-use common::{headless, small_noise, H, W};
+use common::{headless, quiet, small_noise, H, W};
 
 use nimbus::demo::standard_views;
 use nimbus::weather::{HighLayer, Preset, Weather};
 use nimbus::{Error, Headless, Settings};
-
-fn quiet(mut s: Settings) -> Settings {
-    s.march.jitter = false; // the jitter pattern rotates every frame
-    s
-}
 
 fn render(h: &mut Headless, view: usize, time: f64) -> Vec<[f32; 4]> {
     let v = standard_views()[view];

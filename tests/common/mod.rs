@@ -38,6 +38,12 @@ pub fn small_noise(seed: u32) -> Settings {
     }
 }
 
+/// Settings for comparing frames: the blue-noise jitter rotates every frame, so it is off.
+pub fn quiet(mut s: Settings) -> Settings {
+    s.march.jitter = false;
+    s
+}
+
 /// Linear value as stored in an RGBA16F target.
 pub fn f16(v: f32) -> f32 {
     half::f16::from_f32(v).to_f32()
