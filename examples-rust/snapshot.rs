@@ -1,6 +1,9 @@
 //! Renders the standard views without a window and writes one tone-mapped PNG each.
 //!
-//! Usage: cargo run --release --example snapshot -- OUT_DIR [--size WIDTHxHEIGHT]
+//! Each view renders `--frames` frames (default 16) so the temporal reprojection settles: at
+//! the default level one pixel in 16 is traced per frame.
+//!
+//! Usage: cargo run --release --example snapshot -- OUT_DIR [--size WIDTHxHEIGHT] [--frames N]
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -18,6 +21,7 @@ fn run() -> Result<(), String> {
     let mut out: Option<PathBuf> = None;
     let mut size = (640, 360);
     let mut textures = false;
+    let mut frames = 16usize;
     while let Some(a) = args.next() {
         match a.as_str() {
             "--size" => {
@@ -25,8 +29,16 @@ fn run() -> Result<(), String> {
                 size = parse_size(&v).ok_or(format!("bad size {v:?}, expected e.g. 640x360"))?;
             }
             "--textures" => textures = true,
+            "--frames" => {
+                let v = args.next().ok_or("--frames needs a count")?;
+                frames = v
+                    .parse()
+                    .ok()
+                    .filter(|&n| n > 0)
+                    .ok_or(format!("bad frame count {v:?}"))?;
+            }
             "-h" | "--help" => {
-                println!("usage: snapshot OUT_DIR [--size WIDTHxHEIGHT] [--textures]");
+                println!("usage: snapshot OUT_DIR [--size WIDTHxHEIGHT] [--frames N] [--textures]");
                 return Ok(());
             }
             _ if out.is_none() => out = Some(PathBuf::from(a)),
@@ -52,9 +64,10 @@ fn run() -> Result<(), String> {
             .upload_scene(&scene.color, Some(&scene.depth))
             .map_err(|e| e.to_string())?;
         let frame = view.frame(size.0, size.1, 0.0);
-        // The first frame of a view also warms caches; report the median of three.
+        // A new view is a camera cut: start its history afresh, then let it settle.
+        nimbus.renderer_mut().reset_history();
         let mut times = Vec::new();
-        for _ in 0..3 {
+        for _ in 0..frames {
             times.push(nimbus.render(&frame).map_err(|e| e.to_string())?);
         }
         times.sort();
@@ -62,11 +75,11 @@ fn run() -> Result<(), String> {
         let path = out.join(format!("{}.png", view.name));
         write_png(&path, &pixels, size.0, size.1, 1.0).map_err(|e| e.to_string())?;
         println!(
-            "wrote {} ({}x{}), frame {:.1} ms (median of 3, submit to completion)",
+            "wrote {} ({}x{}), frame {:.1} ms (median of {frames}, submit to completion)",
             path.display(),
             size.0,
             size.1,
-            times[1].as_secs_f64() * 1e3
+            times[times.len() / 2].as_secs_f64() * 1e3
         );
     }
     Ok(())

@@ -154,6 +154,21 @@
 // Jitter setting: no jitter (deterministic frame to frame, but banding).
 #define NIMBUS_JITTER_OFF 2
 
+// Quality level: the default (medium).
+#define NIMBUS_QUALITY_DEFAULT 0
+
+// Half-resolution grid, one pixel in 16 traced per frame, short marches.
+#define NIMBUS_QUALITY_LOW 1
+
+// Full-resolution grid, one pixel in 16 traced per frame (the default).
+#define NIMBUS_QUALITY_MEDIUM 2
+
+// Full-resolution grid, one pixel in 4 traced per frame, longer marches.
+#define NIMBUS_QUALITY_HIGH 3
+
+// Every pixel every frame, long marches, no temporal reuse (the unoptimised march).
+#define NIMBUS_QUALITY_ULTRA 4
+
 // Depth flag: the projection is reversed-Z (near at depth 1).
 #define NIMBUS_DEPTH_REVERSED_Z 1
 
@@ -180,6 +195,13 @@ typedef struct NimbusContext NimbusContext;
 
 // An opaque texture handle (see `nimbus_texture_create`).
 typedef struct NimbusTexture NimbusTexture;
+
+// Temporal reprojection and accumulation of the cloud image.
+typedef struct Temporal Temporal;
+
+// Which pixels of the trace grid are traced in a frame. The order is a Bayer matrix, so
+// consecutive frames fill the block evenly.
+typedef struct TracePattern TracePattern;
 
 // Header of every chained extension struct: put it first, set `s_type`, link with `next`.
 typedef struct NimbusChainedStruct {
@@ -282,7 +304,12 @@ typedef struct NimbusSettingsExt {
   float max_distance;
   // Planet radius, meters. 0: 6 360 000.
   float planet_radius;
+  // A `NIMBUS_QUALITY_*` level, applied before the march fields above refine it.
+  // 0: medium.
+  uint32_t quality;
 } NimbusSettingsExt;
+
+
 
 #ifdef __cplusplus
 extern "C" {
@@ -363,6 +390,13 @@ int32_t nimbus_context_load_weather(struct NimbusContext *ctx,
                                     const char *path,
                                     double start,
                                     double duration);
+
+// Drops the accumulated cloud history, so the next frame starts afresh. Call it on camera
+// cuts (a teleport, a switch to another camera); ordinary and fast motion need no call.
+//
+// # Safety
+// `ctx` must be NULL or a live context.
+int32_t nimbus_context_reset_history(struct NimbusContext *ctx);
 
 // Deliberately panics inside the boundary: lets hosts check that a panic comes back as
 // `NIMBUS_ERROR_PANIC` and poisons the context. Never call it in production.

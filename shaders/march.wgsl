@@ -25,8 +25,11 @@ struct MarchUniforms {
     tangent_z: vec4f,       // second horizontal axis, w: trace resolution divisor (1, 2, 4)
     layer_types: vec4f,     // cloud type of layers 1-3, w: weight of the "to" weather map
     horizon: vec4f,         // horizon gradient: strength, start distance (m), coverage, type
-    cirrus: vec4f,          // high layer: coverage, altitude (m), optical depth, unused
+    cirrus: vec4f,          // high layer: coverage, altitude (m), optical depth; w: light-step growth
     skew: vec4f,            // xyz: how far (m) cloud tops lean downwind of their bases
+    grid: vec4f,            // trace grid width, height, block edge k (1, 2, 4), pixel angle (rad)
+    pattern: vec4f,         // this frame's offset in the block (x, y), visit index, unused
+    opts: vec4f,            // coarse-then-fine, distance-grown steps, noise LOD, light LOD (0/1)
 }
 
 @group(0) @binding(0) var<uniform> u: MarchUniforms;
@@ -37,13 +40,28 @@ struct MarchUniforms {
 @group(0) @binding(5) var noise_sampler: sampler;
 //!SCENE_DEPTH_BINDING(6)
 @group(0) @binding(7) var march_out: texture_storage_2d<rgba16float, write>;
-// r: representative cloud depth (m, 0 = no cloud), g: the scene distance the ray was clipped at.
-@group(0) @binding(8) var depth_out: texture_storage_2d<rg32float, write>;
+// r: representative cloud depth (m, 0 = no cloud), g: the scene distance the ray was clipped at,
+// b: density samples taken along the ray, a: density samples taken toward the sun.
+@group(0) @binding(8) var depth_out: texture_storage_2d<rgba32float, write>;
 @group(0) @binding(9) var weather_to: texture_2d<f32>;
 
 const DEBUG_OFF: u32 = 0u;
 const DEBUG_SLAB: u32 = 1u;
 const DEBUG_SPHERE: u32 = 2u;
+
+// Texel sizes (m) of the base and detail volumes, set once per invocation.
+var<private> base_texel: f32;
+var<private> detail_texel: f32;
+// Density samples taken toward the sun by this invocation (the per-ray counter).
+var<private> light_samples: u32;
+
+// Mip level at which one texel covers `footprint` meters (0 with the noise LOD off).
+fn lod_for(footprint: f32, texel: f32) -> f32 {
+    if (u.opts.z < 0.5 || footprint <= texel) {
+        return 0.0;
+    }
+    return log2(footprint / texel);
+}
 
 fn debug_mode() -> u32 {
     return u32(u.misc.z);
@@ -73,7 +91,8 @@ fn weather_at(horizontal: vec2f) -> vec4f {
 }
 
 // Unitless density at p (σt = density × extinction); `cheap` skips the detail erosion.
-fn sample_density(p: vec3f, cheap: bool) -> f32 {
+// `footprint` (m) is how wide a region the sample stands for: it picks the noise mip level.
+fn sample_density(p: vec3f, cheap: bool, footprint: f32) -> f32 {
     let up = u.planet.xyz;
     let radius = u.planet.w;
     let mode = debug_mode();
@@ -107,13 +126,13 @@ fn sample_density(p: vec3f, cheap: bool) -> f32 {
     // Wind shear: higher parts of a cloud lean downwind.
     let sheared = horizontal_of(p + u.skew.xyz * hf);
     let q = vec3f(sheared.x + u.wind.z, h, sheared.y + u.wind.w);
-    let base = textureSampleLevel(base_tex, noise_sampler, q * u.scales.x, 0.0);
+    let base = textureSampleLevel(base_tex, noise_sampler, q * u.scales.x, lod_for(footprint, base_texel));
     let b = base_density(hf, base, coverage, types, u.layer.z);
     if (b <= 0.0 || cheap) {
         return b * u.shape.y;
     }
     let qd = vec3f(sheared.x + u.wind_detail.x, h, sheared.y + u.wind_detail.y);
-    let detail = textureSampleLevel(detail_tex, noise_sampler, qd * u.scales.y, 0.0).rgb;
+    let detail = textureSampleLevel(detail_tex, noise_sampler, qd * u.scales.y, lod_for(footprint, detail_texel)).rgb;
     return eroded_density(hf, b, detail, u.shape.x, u.scales.w, u.shape.y);
 }
 
@@ -169,37 +188,69 @@ fn light_exit(p: vec3f, d: vec3f) -> f32 {
     return select(0.0, max(r.t1, 0.0), r.hit);
 }
 
-// Optical depth toward the sun: steps doubling in length, partitioning [0, exit] exactly so a
-// homogeneous medium integrates without error. The planet's shadow is total.
-fn sun_optical_depth(p: vec3f) -> f32 {
+// Light steps for a sample `distance` meters from the camera: with the light LOD on, one fewer
+// per doubling of the distance beyond 5 km (at least 2). Far clouds cover few pixels and their
+// self-shadowing is soft, so fewer, longer steps over the same length lose little.
+fn light_step_count(distance: f32) -> u32 {
+    let n = u32(u.ambient_bottom.w);
+    if (u.opts.w < 0.5 || distance <= 5000.0) {
+        return n;
+    }
+    let fewer = u32(floor(log2(distance / 5000.0)));
+    return max(n - min(fewer, n), min(n, 2u));
+}
+
+// Optical depth toward the sun: steps growing geometrically (ratio r = u.cirrus.w), partitioning
+// [0, exit] exactly so a homogeneous medium integrates without error. Short first steps resolve
+// the self-shadowing right at the sample, which is what the eye sees; long last steps catch the
+// bulk of the cloud between the sample and the sun. The planet's shadow is total.
+const LIGHT_DETAIL_DISTANCE: f32 = 150.0;
+fn sun_optical_depth(p: vec3f, n: u32, footprint: f32) -> f32 {
     let d = u.sun.xyz;
     let ground = sphere_roots(p, d, u.planet.xyz, u.planet.w, 0.0);
     if (ground.hit && ground.t0 > 0.0) {
         return 1e4;
     }
     let length_total = min(light_exit(p, d), u.ambient_top.w);
-    let n = u32(u.ambient_bottom.w);
-    let unit = length_total / (exp2(f32(n)) - 1.0);
+    let ratio = u.cirrus.w;
+    // First step of a geometric series of n steps summing to the total (uniform for r = 1).
+    var unit = length_total / f32(n);
+    if (ratio > 1.0001) {
+        unit = length_total * (ratio - 1.0) / (pow(ratio, f32(n)) - 1.0);
+    }
     var t = 0.0;
     var tau = 0.0;
     var len = unit;
     for (var i = 0u; i < n; i++) {
-        // Far light samples only see the base shape: detail is invisible in a soft shadow
-        // (Schneider 2015), and it saves a third of the fetches.
-        tau += sample_density(p + d * (t + 0.5 * len), i >= 2u) * len;
+        // Light samples beyond LIGHT_DETAIL_DISTANCE only see the base shape: detail is
+        // invisible in a soft shadow (Schneider 2015), and it saves fetches. A fixed distance
+        // (rather than "after the second step") keeps the model the same for every step layout,
+        // so coarse and converged light marches estimate the same integral.
+        // A light sample stands for a segment of length `len`: a quarter of it is the widest
+        // footprint that keeps thin cloud parts from vanishing in the prefiltered noise.
+        let mid = t + 0.5 * len;
+        tau += sample_density(p + d * mid, mid > LIGHT_DETAIL_DISTANCE, max(footprint, 0.25 * len)) * len;
+        light_samples += 1u;
         t += len;
-        len *= 2.0;
+        len *= ratio;
     }
     return tau * u.shape.z;
 }
 
 @compute @workgroup_size(8, 8, 1)
 fn march(@builtin(global_invocation_id) id: vec3u) {
-    let dims = textureDimensions(march_out);
-    if (any(id.xy >= dims)) {
+    // The march runs on the sparse grid: invocation `id` traces grid pixel id * k + offset.
+    let k = u32(u.grid.z);
+    let grid = vec2u(u.grid.xy);
+    let gp = id.xy * k + vec2u(u.pattern.xy);
+    if (any(id.xy >= textureDimensions(march_out)) || any(gp >= grid)) {
         return;
     }
-    let ndc = pixel_ndc(id.xy, dims);
+    base_texel = 1.0 / (u.scales.x * f32(textureDimensions(base_tex).x));
+    detail_texel = 1.0 / (u.scales.y * f32(textureDimensions(detail_tex).x));
+    light_samples = 0u;
+    var samples = 0u;
+    let ndc = pixel_ndc(gp, grid);
     let cam = u.camera.xyz;
     let near_p = unproject(ndc, u.camera.w);
     let dir = normalize(near_p.xyz / near_p.w - cam);
@@ -211,7 +262,7 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
     if (u.misc.w > 0.5) {
         let scale = u32(u.tangent_z.w);
         let full = textureDimensions(scene_depth);
-        let at = min(id.xy * scale + vec2u(scale / 2u), full - vec2u(1u));
+        let at = min(gp * scale + vec2u(scale / 2u), full - vec2u(1u));
         scene_t = scene_distance_at(u.inv_view_proj, cam, u.sun_color.w, ndc, load_scene_depth(at));
         max_t = min(max_t, scene_t);
     }
@@ -242,15 +293,18 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
         // (paths up to a layer thick) to 2 (five layers and more), so the cloud around the camera
         // is resolved finely and the far horizon coarsely. Consecutive positions partition
         // [0, total] exactly, which keeps Hillaire's per-step integral energy-conserving.
-        let power = 1.0 + clamp((total - thickness) / (4.0 * thickness), 0.0, 1.0);
+        var power = 1.0;
+        if (u.opts.y > 0.5) {
+            power = 1.0 + clamp((total - thickness) / (4.0 * thickness), 0.0, 1.0);
+        }
 
-        // Blue-noise jitter of the sample position inside each step, rotated per frame by the
-        // golden ratio so that temporal accumulation sees fresh offsets.
+        // Blue-noise jitter of the sample position inside each step, rotated by the golden ratio
+        // on every visit of this pixel, so that temporal accumulation sees fresh offsets.
         var jitter = 0.5;
         if (u.march.w > 0.5) {
             let bn_size = textureDimensions(blue_noise);
-            let bn = textureLoad(blue_noise, id.xy % bn_size, 0).r;
-            jitter = fract(bn + u.tangent_x.w * 0.61803398875);
+            let bn = textureLoad(blue_noise, gp % bn_size, 0).r;
+            jitter = fract(bn + u.pattern.z * 0.61803398875);
         }
 
         // Phase per multiple-scattering octave (Wrenninge: eccentricity scaled by c^i).
@@ -263,17 +317,51 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
         }
         var depth_weighted = 0.0;
         let inv_n = 1.0 / f32(n);
-        for (var i = 0u; i < n; i++) {
-            let s = total * pow((f32(i) + jitter) * inv_n, power);
-            let dt = total * (pow(f32(i + 1u) * inv_n, power) - pow(f32(i) * inv_n, power));
+        // Coarse-then-fine (Schneider 2015): while nothing has been found, steps COARSE times as
+        // long probe the cheap base-shape density, which bounds the full density from above, so
+        // an empty probe means an empty step. A hit steps back to the start of the coarse step
+        // and marches it finely; after FINE_EMPTY empty fine samples the ray goes coarse again.
+        // Every step, coarse or fine, is one interval of the same partition of [0, total]:
+        // skipped intervals count as empty, so the integral stays energy-conserving.
+        let coarse_on = u.opts.x > 0.5 && debug_mode() == DEBUG_OFF;
+        let coarse = select(1u, 4u, coarse_on);
+        const FINE_EMPTY: u32 = 4u;
+        var fine = !coarse_on;
+        var empty_run = 0u;
+        var i = 0u;
+        // Bounded: each fine step advances i; each coarse probe either advances i by `coarse`
+        // or switches to fine mode (at most once per run of fine steps).
+        for (var guard = 0u; guard < 3u * n + 8u && i < n; guard++) {
+            let steps = select(min(coarse, n - i), 1u, fine);
+            let x0 = f32(i) * inv_n;
+            let x1 = f32(i + steps) * inv_n;
+            let s = total * pow(x0 + jitter * (x1 - x0), power);
+            let dt = total * (pow(x1, power) - pow(x0, power));
             let t = select(seg.b.x + (s - len_a), seg.a.x + s, s < len_a);
             let p = cam + dir * t;
-            let density = sample_density(p, false);
-            if (density <= 0.0) {
+            let footprint = t * u.grid.w;
+            samples += 1u;
+            if (!fine) {
+                if (sample_density(p, true, footprint) > 0.0) {
+                    fine = true;
+                    empty_run = 0u;
+                } else {
+                    i += steps;
+                }
                 continue;
             }
+            i += 1u;
+            let density = sample_density(p, false, footprint);
+            if (density <= 0.0) {
+                empty_run += 1u;
+                if (coarse_on && empty_run >= FINE_EMPTY) {
+                    fine = false;
+                }
+                continue;
+            }
+            empty_run = 0u;
             let sigma_t = density * u.shape.z;
-            let tau = sun_optical_depth(p);
+            let tau = sun_optical_depth(p, light_step_count(t), footprint);
             // Wrenninge 2015 multiple-scattering octaves.
             var ms = 0.0;
             var a_i = 1.0;
@@ -324,5 +412,5 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
         }
     }
     textureStore(march_out, id.xy, vec4f(radiance, transmittance));
-    textureStore(depth_out, id.xy, vec4f(cloud_depth, scene_t, 0.0, 0.0));
+    textureStore(depth_out, id.xy, vec4f(cloud_depth, scene_t, f32(samples), f32(light_samples)));
 }

@@ -25,6 +25,17 @@ struct OwnedTargets {
     has_depth: bool,
 }
 
+/// Per-ray counters of one frame's march.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayStats {
+    /// Rays traced (one per traced pixel of the trace grid).
+    pub rays: u64,
+    /// Density samples per ray along the view ray (coarse probes included).
+    pub mean_samples: f64,
+    /// Density samples per ray toward the sun.
+    pub mean_light_samples: f64,
+}
+
 /// A renderer with its own device and targets: scene color (RGBA16F), scene depth (R32F,
 /// clip-space depth in the camera's convention) and output (RGBA16F, linear HDR).
 pub struct Headless {
@@ -371,9 +382,39 @@ impl Headless {
             .march_textures()
             .ok_or_else(|| invalid_target("output", "nothing rendered yet"))?;
         let bytes = read_texture(&self.device, &self.queue, depth, 0)?;
-        // RG32F: cloud depth, then the scene distance the ray was clipped at.
-        let rg: Vec<f32> = bytemuck::pod_collect_to_vec(&bytes);
-        Ok(rg.chunks_exact(2).map(|p| p[0]).collect())
+        // RGBA32F: cloud depth, the scene distance the ray was clipped at, samples, -.
+        let rgba: Vec<f32> = bytemuck::pod_collect_to_vec(&bytes);
+        Ok(rgba.chunks_exact(4).map(|p| p[0]).collect())
+    }
+
+    /// What the last frame's march did: rays traced and density samples per ray (read back
+    /// from per-ray counters the march writes).
+    pub fn read_ray_stats(&self) -> Result<RayStats> {
+        let (texture, layout) = self
+            .renderer
+            .fresh_samples()
+            .ok_or_else(|| invalid_target("output", "nothing rendered yet"))?;
+        let bytes = read_texture(&self.device, &self.queue, texture, 0)?;
+        let texels: Vec<f32> = bytemuck::pod_collect_to_vec(&bytes);
+        let width = texture.width();
+        let (mut rays, mut samples, mut light) = (0u64, 0f64, 0f64);
+        for (i, t) in texels.chunks_exact(4).enumerate() {
+            let (x, y) = (i as u32 % width, i as u32 / width);
+            // Texels whose grid pixel lies outside the grid were not traced.
+            let gx = x * layout.block + layout.offset.0;
+            let gy = y * layout.block + layout.offset.1;
+            if gx < layout.grid.0 && gy < layout.grid.1 {
+                rays += 1;
+                samples += t[2] as f64;
+                light += t[3] as f64;
+            }
+        }
+        let per_ray = |v: f64| if rays == 0 { 0.0 } else { v / rays as f64 };
+        Ok(RayStats {
+            rays,
+            mean_samples: per_ray(samples),
+            mean_light_samples: per_ray(light),
+        })
     }
 
     /// One mip level of a baked noise volume, RGBA8, x fastest then y then z.

@@ -38,9 +38,9 @@ pub use error::{Error, Result};
 pub use frame::{Camera, DepthConvention, FrameInputs, Sun};
 pub use gpu::noise::NoiseVolume;
 pub use gpu::timing::PassTimes;
-pub use headless::Headless;
+pub use headless::{Headless, RayStats};
 pub use renderer::{ColorTargets, Renderer, Targets};
-pub use settings::{DebugDensity, Settings};
+pub use settings::{DebugDensity, Quality, Settings, Temporal, TracePattern};
 pub use weather::{Preset, Weather};
 pub use wgpu;
 

@@ -12,6 +12,7 @@ use crate::gpu::composite::{CompositeCache, CompositeInputs, CompositeUniforms};
 use crate::gpu::march::{MarchPipeline, MarchUniforms};
 use crate::gpu::noise::{NoiseTextures, NoiseVolume};
 use crate::gpu::shaders::DepthKind;
+use crate::gpu::temporal::{CloudImage, ResolveFrame, TemporalPipeline, TemporalUniforms};
 use crate::gpu::timing::{GpuTimer, PassTimes};
 use crate::gpu::weather::WeatherMaps;
 use crate::settings::Settings;
@@ -68,14 +69,50 @@ pub struct Targets<'a> {
     pub depth: Option<&'a wgpu::TextureView>,
 }
 
+/// What the per-size textures depend on: output size, trace divisor, pattern block, temporal.
+type SizeKey = ((u32, u32), u32, u32, bool);
+
 struct SizedTextures {
-    /// Output size and trace divisor these were made for.
-    key: ((u32, u32), u32),
-    march_view: wgpu::TextureView,
-    cloud_depth_view: wgpu::TextureView,
-    /// Kept so the readback helpers can copy them.
-    march: wgpu::Texture,
-    cloud_depth: wgpu::Texture,
+    key: SizeKey,
+    /// The trace grid: the output divided by the trace divisor.
+    grid: (u32, u32),
+    /// This frame's march: one texel per traced pixel (the grid divided by the block edge).
+    fresh: CloudImage,
+    /// The resolved grid, ping-pong (this frame's and last frame's); empty with temporal off.
+    history: Vec<CloudImage>,
+}
+
+/// Where the last frame traced: the grid, the pattern block and this frame's offset in it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct TraceLayout {
+    pub grid: (u32, u32),
+    pub block: u32,
+    pub offset: (u32, u32),
+}
+
+/// What `prepare` derived for `encode`.
+#[derive(Clone, Copy)]
+struct Pending {
+    march: MarchUniforms,
+    composite: CompositeUniforms,
+    view_proj: glam::Mat4,
+    inv_view_proj: glam::Mat4,
+    camera: glam::Vec3,
+    near_value: f32,
+    far_value: f32,
+}
+
+/// Temporal reprojection state between frames.
+#[derive(Default)]
+struct History {
+    /// Index into `SizedTextures::history` of the last resolved grid.
+    current: usize,
+    /// The view-projection the last resolved grid was rendered with; `None`: no usable history.
+    view_proj: Option<glam::Mat4>,
+    /// Where the last frame traced (for the readback helpers).
+    layout: Option<TraceLayout>,
+    /// Whether the last frame ran the resolve pass.
+    resolved: bool,
 }
 
 /// Renders volumetric clouds with the host's wgpu device.
@@ -89,12 +126,16 @@ pub struct Renderer {
     last_time: f64,
     march_depth: MarchPipeline,
     march_r32: MarchPipeline,
+    temporal_depth: TemporalPipeline,
+    temporal_r32: TemporalPipeline,
     composite: CompositeCache,
     uniforms: wgpu::Buffer,
+    temporal_uniforms: wgpu::Buffer,
     composite_uniforms: wgpu::Buffer,
     no_depth: wgpu::TextureView,
     sized: Option<SizedTextures>,
-    pending: Option<(MarchUniforms, CompositeUniforms)>,
+    pending: Option<Pending>,
+    history: History,
     timer: Option<GpuTimer>,
     frame_index: u32,
 }
@@ -252,6 +293,12 @@ impl Renderer {
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             });
+            let temporal_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("nimbus temporal uniforms"),
+                size: std::mem::size_of::<TemporalUniforms>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
             let composite_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("nimbus composite uniforms"),
                 size: std::mem::size_of::<CompositeUniforms>() as u64,
@@ -271,6 +318,8 @@ impl Renderer {
                 queue: queue.clone(),
                 march_depth: MarchPipeline::new(device, DepthKind::Depth),
                 march_r32: MarchPipeline::new(device, DepthKind::R32Float),
+                temporal_depth: TemporalPipeline::new(device, DepthKind::Depth),
+                temporal_r32: TemporalPipeline::new(device, DepthKind::R32Float),
                 composite: CompositeCache::default(),
                 timeline: Timeline::new(settings.weather.clone(), 0.0),
                 last_time: 0.0,
@@ -278,10 +327,12 @@ impl Renderer {
                 settings,
                 noise,
                 uniforms,
+                temporal_uniforms,
                 composite_uniforms,
                 no_depth,
                 sized: None,
                 pending: None,
+                history: History::default(),
                 timer: None,
                 frame_index: 0,
             }
@@ -323,7 +374,16 @@ impl Renderer {
             }
         })?;
         self.settings = settings;
+        // Accumulated history was rendered with the old settings.
+        self.reset_history();
         Ok(())
+    }
+
+    /// Drops the accumulated cloud history: the next frame starts afresh, with no
+    /// reprojection. Call it on camera cuts (teleports, switching to another camera); fast
+    /// motion is handled without it. Settings changes and resizes reset it themselves.
+    pub fn reset_history(&mut self) {
+        self.history.view_proj = None;
     }
 
     /// Starts a transition to `weather`, beginning at host time `start` (seconds, the clock of
@@ -373,35 +433,51 @@ impl Renderer {
             self.settings.march.resolution.divisor(),
             false,
         );
-        self.pending = Some((march, composite));
+        self.pending = Some(Pending {
+            march,
+            composite,
+            view_proj: camera.view_proj,
+            inv_view_proj: camera.inv_view_proj,
+            camera: camera.position,
+            near_value: frame.camera.depth.near_value(),
+            far_value: frame.camera.depth.far_value(),
+        });
         Ok(())
     }
 
-    /// Records the march and composite passes into `encoder`. Submits nothing: the host
-    /// submits the encoder. One `encode` per `prepare`.
+    /// Records the march, the temporal resolve (when on) and the composite into `encoder`.
+    /// Submits nothing: the host submits the encoder. One `encode` per `prepare`; with temporal
+    /// reprojection on, one renderer per view (the history belongs to one camera).
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder, targets: &Targets) -> Result<()> {
-        let (mut uniforms, mut composite) = self.pending.ok_or(Error::NotPrepared)?;
+        let pending = self.pending.ok_or(Error::NotPrepared)?;
+        let (mut uniforms, mut composite) = (pending.march, pending.composite);
         let checked = check_targets(targets)?;
         let has_depth = targets.depth.is_some();
         uniforms.set_has_depth(has_depth);
         composite.set_has_depth(has_depth);
+        let temporal = self.settings.march.temporal;
+        let pattern = temporal.pattern;
+        let block = pattern.block();
+        let offset = pattern.offset(self.frame_index);
         let device = self.device.clone();
-        gpu_scope(&device, || {
+        let layout = gpu_scope(&device, || {
             self.ensure_size(checked.size);
-            self.queue
-                .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
-            self.queue
-                .write_buffer(&self.composite_uniforms, 0, bytemuck::bytes_of(&composite));
             let sized = self
                 .sized
                 .as_ref()
                 .expect("sized textures exist after ensure_size");
-            let march = match checked.depth_kind {
-                DepthKind::Depth => &self.march_depth,
-                DepthKind::R32Float => &self.march_r32,
+            let grid = sized.grid;
+            uniforms.set_grid(grid, block, offset, self.frame_index / (block * block));
+            self.queue
+                .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
+            self.queue
+                .write_buffer(&self.composite_uniforms, 0, bytemuck::bytes_of(&composite));
+            let (march, resolve) = match checked.depth_kind {
+                DepthKind::Depth => (&self.march_depth, &self.temporal_depth),
+                DepthKind::R32Float => (&self.march_r32, &self.temporal_r32),
             };
             let scene_depth = targets.depth.unwrap_or(&self.no_depth);
-            let trace_size = (sized.march.width(), sized.march.height());
+            let fresh = &sized.fresh;
             march.record(
                 &device,
                 encoder,
@@ -409,18 +485,55 @@ impl Renderer {
                 &self.noise,
                 self.weather_maps.views(),
                 scene_depth,
-                &sized.march_view,
-                &sized.cloud_depth_view,
-                trace_size,
+                &fresh.clouds.view,
+                &fresh.depth.view,
+                (fresh.clouds.texture.width(), fresh.clouds.texture.height()),
                 self.timer.as_ref(),
             );
+            let resolved = if temporal.enabled {
+                let previous = &sized.history[self.history.current];
+                let next = &sized.history[1 - self.history.current];
+                let frame = ResolveFrame {
+                    inv_view_proj: pending.inv_view_proj,
+                    prev_view_proj: self.history.view_proj,
+                    camera: pending.camera,
+                    near_value: pending.near_value,
+                    far_value: pending.far_value,
+                    grid,
+                    block,
+                    offset,
+                    divisor: self.settings.march.resolution.divisor(),
+                    max_samples: temporal.max_samples,
+                    has_depth,
+                    max_distance: self.settings.march.max_distance,
+                };
+                self.queue.write_buffer(
+                    &self.temporal_uniforms,
+                    0,
+                    bytemuck::bytes_of(&TemporalUniforms::new(&frame)),
+                );
+                resolve.record(
+                    &device,
+                    encoder,
+                    &self.temporal_uniforms,
+                    fresh,
+                    previous,
+                    scene_depth,
+                    next,
+                    grid,
+                    self.timer.as_ref(),
+                );
+                next
+            } else {
+                fresh
+            };
             let (scene, output) = match targets.color {
                 ColorTargets::InPlace(v) => (None, v),
                 ColorTargets::Separate { scene, output } => (Some(scene), output),
             };
             let inputs = CompositeInputs {
-                clouds: &sized.march_view,
-                cloud_depth: &sized.cloud_depth_view,
+                clouds: &resolved.clouds.view,
+                cloud_depth: &resolved.depth.view,
                 scene_depth,
                 depth_kind: checked.depth_kind,
                 uniforms: &self.composite_uniforms,
@@ -437,36 +550,49 @@ impl Renderer {
             if let Some(timer) = &self.timer {
                 timer.resolve(encoder);
             }
+            TraceLayout {
+                grid,
+                block,
+                offset,
+            }
         })?;
+        // Only once the work is recorded does the history move on.
+        if temporal.enabled {
+            self.history.current = 1 - self.history.current;
+            self.history.view_proj = Some(pending.view_proj);
+        }
+        self.history.resolved = temporal.enabled;
+        self.history.layout = Some(layout);
         self.frame_index = self.frame_index.wrapping_add(1);
         Ok(())
     }
 
-    /// (Re)creates the internal per-size textures: only when the target size or the trace
-    /// resolution changes.
+    /// (Re)creates the internal per-size textures: only when the target size, the trace
+    /// resolution, the pattern or temporal on/off changes. New textures drop the history.
     fn ensure_size(&mut self, size: (u32, u32)) {
         let divisor = self.settings.march.resolution.divisor();
-        if self
-            .sized
-            .as_ref()
-            .is_some_and(|s| s.key == (size, divisor))
-        {
+        let temporal = self.settings.march.temporal;
+        let block = temporal.pattern.block();
+        let key = (size, divisor, block, temporal.enabled);
+        if self.sized.as_ref().is_some_and(|s| s.key == key) {
             return;
         }
-        let trace = (size.0.div_ceil(divisor), size.1.div_ceil(divisor));
-        use wgpu::TextureUsages as U;
-        let usage = U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC;
-        let make =
-            |label, format| crate::gpu::texture_2d(&self.device, label, trace, format, usage);
-        let march = make("nimbus clouds (L, T)", F::Rgba16Float);
-        let cloud_depth = make("nimbus cloud depth", F::Rg32Float);
+        let grid = (size.0.div_ceil(divisor), size.1.div_ceil(divisor));
+        let sparse = (grid.0.div_ceil(block), grid.1.div_ceil(block));
+        let history = if temporal.enabled {
+            (0..2)
+                .map(|i| CloudImage::new(&self.device, &format!("history {i}"), grid))
+                .collect()
+        } else {
+            Vec::new()
+        };
         self.sized = Some(SizedTextures {
-            key: (size, divisor),
-            march_view: march.create_view(&Default::default()),
-            cloud_depth_view: cloud_depth.create_view(&Default::default()),
-            march,
-            cloud_depth,
+            key,
+            grid,
+            fresh: CloudImage::new(&self.device, "march", sparse),
+            history,
         });
+        self.history = History::default();
     }
 
     /// Records GPU timestamps around the march and composite passes from now on (for
@@ -482,10 +608,18 @@ impl Renderer {
     /// The GPU time of each pass in the last submitted frame, once timing is enabled. Waits
     /// for the GPU.
     pub fn last_pass_times(&self) -> Result<Option<PassTimes>> {
-        self.timer
+        let times = self
+            .timer
             .as_ref()
             .map(|t| t.read(&self.device))
-            .transpose()
+            .transpose()?;
+        // The resolve's queries keep an older frame's values when it did not run.
+        Ok(times.map(|mut t| {
+            if !self.history.resolved {
+                t.resolve_ms = 0.0;
+            }
+            t
+        }))
     }
 
     /// Bytes of GPU memory Nimbus has allocated for textures and buffers (noise volumes with
@@ -503,9 +637,14 @@ impl Renderer {
         let mut total =
             self.noise.memory_bytes(texture_bytes) + self.weather_maps.memory_bytes(texture_bytes);
         if let Some(s) = &self.sized {
-            total += texture_bytes(&s.march) + texture_bytes(&s.cloud_depth);
+            for image in std::iter::once(&s.fresh).chain(&s.history) {
+                total += texture_bytes(&image.clouds.texture) + texture_bytes(&image.depth.texture);
+            }
         }
-        total + self.uniforms.size() + self.composite_uniforms.size()
+        total
+            + self.uniforms.size()
+            + self.temporal_uniforms.size()
+            + self.composite_uniforms.size()
     }
 
     /// Number of composite pipelines built so far (one per output format and mode).
@@ -522,8 +661,22 @@ impl Renderer {
         self.weather_maps.textures()
     }
 
-    /// The march result of the last frame: RGBA16F with rgb = L, a = T; and the cloud depth.
+    /// The clouds the last frame composited, on the trace grid: RGBA16F with rgb = L, a = T;
+    /// and RGBA32F (cloud depth, scene distance, samples held, -).
     pub(crate) fn march_textures(&self) -> Option<(&wgpu::Texture, &wgpu::Texture)> {
-        self.sized.as_ref().map(|s| (&s.march, &s.cloud_depth))
+        let s = self.sized.as_ref()?;
+        let image = if self.history.resolved {
+            &s.history[self.history.current]
+        } else {
+            &s.fresh
+        };
+        Some((&image.clouds.texture, &image.depth.texture))
+    }
+
+    /// The last frame's sparse march depth (cloud depth, scene distance, density samples,
+    /// light samples per traced pixel) and where those pixels lie in the grid.
+    pub(crate) fn fresh_samples(&self) -> Option<(&wgpu::Texture, TraceLayout)> {
+        let s = self.sized.as_ref()?;
+        Some((&s.fresh.depth.texture, self.history.layout?))
     }
 }

@@ -13,6 +13,7 @@ use crate::headless::{
     collect_uncaptured_errors, create_owned_device, take_errors, MAX_HEADLESS_SIZE,
 };
 use crate::renderer::{ColorTargets, Targets};
+use crate::settings::Quality;
 use crate::weather::{Preset, Weather};
 use crate::{Camera, DepthConvention, FrameInputs, Renderer, Settings, Sun};
 
@@ -100,6 +101,18 @@ fn preset(id: u32) -> FfiResult<Weather> {
         .ok_or_else(|| FfiError::arg(format!("unknown preset id {id} (valid: 1..=5)")))
 }
 
+fn quality(id: u32) -> FfiResult<Quality> {
+    match id {
+        NIMBUS_QUALITY_LOW => Ok(Quality::Low),
+        NIMBUS_QUALITY_MEDIUM => Ok(Quality::Medium),
+        NIMBUS_QUALITY_HIGH => Ok(Quality::High),
+        NIMBUS_QUALITY_ULTRA => Ok(Quality::Ultra),
+        q => Err(FfiError::arg(format!(
+            "unknown quality level {q} (valid: 0 = default, 1..=4 = low..ultra)"
+        ))),
+    }
+}
+
 fn settings_from_chain(mut next: *const NimbusChainedStruct) -> FfiResult<Settings> {
     check_chain(next, &[NIMBUS_STYPE_SETTINGS])?;
     let mut s = Settings::default();
@@ -111,6 +124,11 @@ fn settings_from_chain(mut next: *const NimbusChainedStruct) -> FfiResult<Settin
             let ext = unsafe { &*next.cast::<NimbusSettingsExt>() };
             if ext.initial_preset != 0 {
                 s.weather = preset(ext.initial_preset)?;
+            }
+            // The level first: the explicit fields below refine it.
+            match ext.quality {
+                NIMBUS_QUALITY_DEFAULT => {}
+                q => quality(q)?.apply(&mut s),
             }
             if ext.noise_seed != 0 {
                 s.noise.seed = ext.noise_seed;
@@ -557,6 +575,22 @@ pub unsafe extern "C" fn nimbus_context_load_weather(
             let path = c_str(path, "path")?;
             let w = Weather::load(std::path::Path::new(path))?;
             inner.renderer.set_weather(w, start, duration)?;
+            Ok(NIMBUS_OK)
+        })
+    }
+}
+
+/// Drops the accumulated cloud history, so the next frame starts afresh. Call it on camera
+/// cuts (a teleport, a switch to another camera); ordinary and fast motion need no call.
+///
+/// # Safety
+/// `ctx` must be NULL or a live context.
+#[no_mangle]
+pub unsafe extern "C" fn nimbus_context_reset_history(ctx: *mut NimbusContext) -> i32 {
+    // SAFETY: the caller guarantees a live context or NULL.
+    unsafe {
+        with_ctx(ctx, |inner| {
+            inner.renderer.reset_history();
             Ok(NIMBUS_OK)
         })
     }

@@ -78,6 +78,17 @@ pub const NIMBUS_JITTER_ON: u32 = 1;
 /// Jitter setting: no jitter (deterministic frame to frame, but banding).
 pub const NIMBUS_JITTER_OFF: u32 = 2;
 
+/// Quality level: the default (medium).
+pub const NIMBUS_QUALITY_DEFAULT: u32 = 0;
+/// Half-resolution grid, one pixel in 16 traced per frame, short marches.
+pub const NIMBUS_QUALITY_LOW: u32 = 1;
+/// Full-resolution grid, one pixel in 16 traced per frame (the default).
+pub const NIMBUS_QUALITY_MEDIUM: u32 = 2;
+/// Full-resolution grid, one pixel in 4 traced per frame, longer marches.
+pub const NIMBUS_QUALITY_HIGH: u32 = 3;
+/// Every pixel every frame, long marches, no temporal reuse (the unoptimised march).
+pub const NIMBUS_QUALITY_ULTRA: u32 = 4;
+
 /// Settings extension (`s_type = NIMBUS_STYPE_SETTINGS`). Zero in any field means its default.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
@@ -98,6 +109,9 @@ pub struct NimbusSettingsExt {
     pub max_distance: f32,
     /// Planet radius, meters. 0: 6 360 000.
     pub planet_radius: f32,
+    /// A `NIMBUS_QUALITY_*` level, applied before the march fields above refine it.
+    /// 0: medium.
+    pub quality: u32,
 }
 
 /// Depth flag: the projection is reversed-Z (near at depth 1).

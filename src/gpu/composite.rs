@@ -162,7 +162,7 @@ impl CompositeCache {
             })],
             depth_stencil_attachment: None,
             timestamp_writes: inputs.timer.map(|t| {
-                let (begin, end) = t.writes(true);
+                let (begin, end) = t.writes(super::timing::Pass::Composite);
                 wgpu::RenderPassTimestampWrites {
                     query_set: &t.query_set,
                     beginning_of_pass_write_index: begin,

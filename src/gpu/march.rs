@@ -39,6 +39,9 @@ pub(crate) struct MarchUniforms {
     horizon: [f32; 4],
     cirrus: [f32; 4],
     skew: [f32; 4],
+    grid: [f32; 4],
+    pattern: [f32; 4],
+    opts: [f32; 4],
 }
 
 /// Two horizontal axes perpendicular to `up` (X and Z for +Y up).
@@ -153,12 +156,7 @@ impl MarchUniforms {
                 if s.march.jitter { 1.0 } else { 0.0 },
             ],
             haze: v4(s.haze.color, s.haze.start_distance),
-            misc: [
-                inv_fade,
-                phase_model as f32,
-                debug_mode,
-                if has_depth { 1.0 } else { 0.0 },
-            ],
+            misc: [inv_fade, phase_model as f32, debug_mode, flag(has_depth)],
             debug,
             debug_sphere: sphere,
             tangent_x: v4(tx, (frame_index % 1024) as f32),
@@ -174,17 +172,60 @@ impl MarchUniforms {
                 w.high_layer.coverage,
                 w.high_layer.altitude,
                 w.high_layer.optical_depth,
-                0.0,
+                s.lighting.light_step_growth,
             ],
             skew: v4(skew, 0.0),
+            // The grid and pattern are known once the targets are: see `set_grid`. Until then
+            // grid.w holds tan(fov_y / 2), from which `set_grid` derives the pixel angle.
+            grid: [
+                0.0,
+                0.0,
+                1.0,
+                1.0 / frame.camera.projection.y_axis.y.abs().max(1e-6),
+            ],
+            pattern: [0.0; 4],
+            opts: [
+                flag(s.march.coarse_then_fine),
+                flag(s.march.distance_steps),
+                flag(s.march.noise_lod),
+                flag(s.lighting.light_lod),
+            ],
         }
+    }
+}
+
+fn flag(on: bool) -> f32 {
+    if on {
+        1.0
+    } else {
+        0.0
     }
 }
 
 impl MarchUniforms {
     /// Whether the march clips rays at the scene depth (known only once targets are given).
     pub(crate) fn set_has_depth(&mut self, has_depth: bool) {
-        self.misc[3] = if has_depth { 1.0 } else { 0.0 };
+        self.misc[3] = flag(has_depth);
+    }
+
+    /// The trace grid (`grid` pixels), the block edge `block` of the trace pattern, and which
+    /// pixel of each block this frame traces (`offset`) on its `visit`-th pass over the block.
+    pub(crate) fn set_grid(
+        &mut self,
+        grid: (u32, u32),
+        block: u32,
+        offset: (u32, u32),
+        visit: u32,
+    ) {
+        let tan_half_fov = self.grid[3];
+        self.grid = [
+            grid.0 as f32,
+            grid.1 as f32,
+            block as f32,
+            // Angle one grid pixel subtends at the image center: what the noise LOD filters.
+            2.0 * tan_half_fov / grid.1.max(1) as f32,
+        ];
+        self.pattern = [offset.0 as f32, offset.1 as f32, (visit % 4096) as f32, 0.0];
     }
 }
 
@@ -259,7 +300,7 @@ impl MarchPipeline {
                 },
                 texture_entry(6, depth_type, D::D2),
                 storage_entry(7, wgpu::TextureFormat::Rgba16Float),
-                storage_entry(8, wgpu::TextureFormat::Rg32Float),
+                storage_entry(8, wgpu::TextureFormat::Rgba32Float),
                 texture_entry(9, filterable, D::D2),
             ],
         });
@@ -283,7 +324,7 @@ impl MarchPipeline {
         Self { layout, pipeline }
     }
 
-    /// Records the march dispatch for a `width`×`height` image.
+    /// Records the march dispatch over the sparse grid of `size` invocations.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn record(
         &self,
@@ -327,7 +368,7 @@ impl MarchPipeline {
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("nimbus march"),
             timestamp_writes: timer.map(|t| {
-                let (begin, end) = t.writes(false);
+                let (begin, end) = t.writes(super::timing::Pass::March);
                 wgpu::ComputePassTimestampWrites {
                     query_set: &t.query_set,
                     beginning_of_pass_write_index: begin,
@@ -347,12 +388,12 @@ mod tests {
 
     #[test]
     fn uniforms_match_the_wgsl_struct_size() {
-        // 1 mat4 + 24 vec4 in shaders/march.wgsl.
-        assert_eq!(std::mem::size_of::<MarchUniforms>(), 64 + 24 * 16);
+        // 1 mat4 + 27 vec4 in shaders/march.wgsl.
+        assert_eq!(std::mem::size_of::<MarchUniforms>(), 64 + 27 * 16);
         let src = pass_source("march", DepthKind::Depth);
         let start = src.find("struct MarchUniforms").unwrap();
         let body = &src[start..start + src[start..].find('}').unwrap()];
-        assert_eq!(body.matches(": vec4f").count(), 24);
+        assert_eq!(body.matches(": vec4f").count(), 27);
         assert_eq!(body.matches(": mat4x4f").count(), 1);
     }
 

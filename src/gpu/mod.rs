@@ -8,6 +8,7 @@ pub(crate) mod march;
 pub mod noise;
 pub(crate) mod readback;
 pub(crate) mod shaders;
+pub(crate) mod temporal;
 pub mod timing;
 pub(crate) mod weather;
 

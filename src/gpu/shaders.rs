@@ -27,6 +27,7 @@ pub(crate) const WEATHER_BAKE: (&str, &str) = shader!("weather_bake.wgsl");
 pub(crate) const WEATHER_BLEND: (&str, &str) = shader!("weather_blend.wgsl");
 pub(crate) const MIP_DOWNSAMPLE: (&str, &str) = shader!("mip_downsample.wgsl");
 pub(crate) const MARCH: (&str, &str) = shader!("march.wgsl");
+pub(crate) const TEMPORAL: (&str, &str) = shader!("temporal.wgsl");
 pub(crate) const COMPOSITE: (&str, &str) = shader!("composite.wgsl");
 pub(crate) const COMPOSITE_SEPARATE: (&str, &str) = shader!("composite_separate.wgsl");
 
@@ -37,6 +38,7 @@ pub(crate) const PASSES: &[(&str, &[(&str, &str)])] = &[
     ("weather_blend", &[WEATHER_BLEND]),
     ("mip_downsample", &[MIP_DOWNSAMPLE]),
     ("march", &[COMMON, DEPTH, ATMOSPHERE, PHASE, DENSITY, MARCH]),
+    ("temporal", &[DEPTH, TEMPORAL]),
     ("composite_in_place", &[DEPTH, COMPOSITE]),
     (
         "composite_separate",

@@ -1,4 +1,4 @@
-//! GPU time of the march and composite passes from timestamp queries (benchmarks only; never
+//! GPU time of the march, temporal resolve and composite passes from timestamp queries (benchmarks only; never
 //! in pass/fail tests). Lavapipe has timestamps, but cross-check them with wall time.
 
 use crate::error::Result;
@@ -8,6 +8,8 @@ use crate::error::Result;
 pub struct PassTimes {
     /// The ray-march compute pass.
     pub march_ms: f64,
+    /// The temporal resolve compute pass (0 with temporal reprojection off).
+    pub resolve_ms: f64,
     /// The composite (upsample + blend) render pass.
     pub composite_ms: f64,
 }
@@ -19,7 +21,15 @@ pub(crate) struct GpuTimer {
     period_ns: f32,
 }
 
-const QUERIES: u32 = 4;
+/// The timed passes; each has a begin and an end query.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Pass {
+    March = 0,
+    Resolve = 1,
+    Composite = 2,
+}
+
+const QUERIES: u32 = 6;
 
 impl GpuTimer {
     /// A timer, or `None` when the device lacks `TIMESTAMP_QUERY`.
@@ -50,9 +60,9 @@ impl GpuTimer {
         })
     }
 
-    /// Timestamp writes for the march (queries 0, 1) or the composite (2, 3).
-    pub fn writes(&self, composite: bool) -> (Option<u32>, Option<u32>) {
-        let base = if composite { 2 } else { 0 };
+    /// Timestamp writes (begin, end) for a pass.
+    pub fn writes(&self, pass: Pass) -> (Option<u32>, Option<u32>) {
+        let base = pass as u32 * 2;
         (Some(base), Some(base + 1))
     }
 
@@ -71,7 +81,8 @@ impl GpuTimer {
         };
         Ok(PassTimes {
             march_ms: ms(0, 1),
-            composite_ms: ms(2, 3),
+            resolve_ms: ms(2, 3),
+            composite_ms: ms(4, 5),
         })
     }
 }

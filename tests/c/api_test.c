@@ -112,6 +112,9 @@ static void test_create(void) {
     s.planet_radius = NAN;
     EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_SETTINGS);
     s.planet_radius = 0.0f;
+    s.quality = 5; /* levels are 0 (default) and 1..4 */
+    EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_ARGUMENT);
+    s.quality = NIMBUS_QUALITY_DEFAULT;
     desc.window = &win;
     desc.width = 64; desc.height = 64;
     win.platform = 42;
@@ -124,6 +127,7 @@ static void test_create(void) {
     EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_ARGUMENT);
     if (out != before) { printf("FAIL: out was written on failure\n"); failed++; }
     desc.window = NULL;
+    s.quality = NIMBUS_QUALITY_HIGH; /* the explicit step counts below refine the level */
     s.march_max_steps = 64; s.march_min_steps = 32; s.jitter = NIMBUS_JITTER_OFF;
     EXPECT(nimbus_context_create(&desc, &ctx), NIMBUS_OK);
 }
@@ -285,7 +289,12 @@ static void test_misc_and_poison(void) {
     if (nimbus_context_adapter_name(NULL) != NULL) { printf("FAIL: adapter name of NULL\n"); failed++; } else passed++;
     printf("adapter: %s\n", nimbus_context_adapter_name(ctx));
 
+    EXPECT(nimbus_context_reset_history(NULL), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT(nimbus_context_reset_history(ctx), NIMBUS_OK);
+    EXPECT(render_ok(), NIMBUS_OK);
+
     EXPECT(nimbus_context_debug_panic(ctx), NIMBUS_ERROR_PANIC);
+    EXPECT(nimbus_context_reset_history(ctx), NIMBUS_ERROR_POISONED);
     EXPECT(render_ok(), NIMBUS_ERROR_POISONED);
     EXPECT(nimbus_context_set_weather(ctx, NIMBUS_PRESET_CLEAR, 0, 100.0, 1.0), NIMBUS_ERROR_POISONED);
     nimbus_texture_destroy(scene); nimbus_texture_destroy(output); nimbus_texture_destroy(depth);

@@ -2,7 +2,7 @@
 #![allow(dead_code)]
 
 use nimbus::settings::NoiseSettings;
-use nimbus::{Headless, Settings};
+use nimbus::{Headless, Settings, Temporal};
 
 pub const W: u32 = 160;
 pub const H: u32 = 90;
@@ -38,9 +38,11 @@ pub fn small_noise(seed: u32) -> Settings {
     }
 }
 
-/// Settings for comparing frames: the blue-noise jitter rotates every frame, so it is off.
+/// Settings for comparing single frames: the blue-noise jitter rotates every frame, so it is
+/// off, and every pixel is traced every frame (no temporal reprojection).
 pub fn quiet(mut s: Settings) -> Settings {
     s.march.jitter = false;
+    s.march.temporal = Temporal::OFF;
     s
 }
 

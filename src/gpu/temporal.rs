@@ -1,0 +1,253 @@
+//! The temporal resolve pass: rebuilds the full trace grid from this frame's sparse march and
+//! last frame's resolved grid (shaders/temporal.wgsl), plus the ping-pong history it owns.
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+
+use super::shaders::{pass_source, DepthKind};
+
+/// Layout must match `TemporalUniforms` in shaders/temporal.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+pub(crate) struct TemporalUniforms {
+    inv_view_proj: [f32; 16],
+    prev_view_proj: [f32; 16],
+    camera: [f32; 4],
+    grid: [f32; 4],
+    pattern: [f32; 4],
+    misc: [f32; 4],
+}
+
+/// What the resolve of one frame needs to know.
+pub(crate) struct ResolveFrame {
+    pub inv_view_proj: Mat4,
+    /// The view-projection the history was rendered with; `None` when there is no usable
+    /// history (first frame, reset, resize, new settings).
+    pub prev_view_proj: Option<Mat4>,
+    pub camera: Vec3,
+    pub near_value: f32,
+    pub far_value: f32,
+    pub grid: (u32, u32),
+    pub block: u32,
+    pub offset: (u32, u32),
+    pub divisor: u32,
+    pub max_samples: u32,
+    pub has_depth: bool,
+    pub max_distance: f32,
+}
+
+impl TemporalUniforms {
+    pub(crate) fn new(f: &ResolveFrame) -> Self {
+        let flag = |b: bool| if b { 1.0 } else { 0.0 };
+        Self {
+            inv_view_proj: f.inv_view_proj.to_cols_array(),
+            prev_view_proj: f.prev_view_proj.unwrap_or(Mat4::IDENTITY).to_cols_array(),
+            camera: f.camera.extend(f.near_value).to_array(),
+            grid: [
+                f.grid.0 as f32,
+                f.grid.1 as f32,
+                f.block as f32,
+                f.divisor as f32,
+            ],
+            pattern: [
+                f.offset.0 as f32,
+                f.offset.1 as f32,
+                flag(f.prev_view_proj.is_some()),
+                f.max_samples as f32,
+            ],
+            misc: [flag(f.has_depth), f.far_value, f.max_distance, 0.0],
+        }
+    }
+}
+
+/// A texture and its full view.
+pub(crate) struct Target {
+    pub texture: wgpu::Texture,
+    pub view: wgpu::TextureView,
+}
+
+impl Target {
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        label: &str,
+        size: (u32, u32),
+        format: wgpu::TextureFormat,
+    ) -> Self {
+        use wgpu::TextureUsages as U;
+        let usage = U::STORAGE_BINDING | U::TEXTURE_BINDING | U::COPY_SRC;
+        let texture = super::texture_2d(device, label, size, format, usage);
+        let view = texture.create_view(&Default::default());
+        Self { texture, view }
+    }
+}
+
+/// A resolved grid: (L, T) in RGBA16F and (cloud depth, scene distance, samples) in RGBA32F.
+pub(crate) struct CloudImage {
+    pub clouds: Target,
+    pub depth: Target,
+}
+
+impl CloudImage {
+    pub(crate) fn new(device: &wgpu::Device, label: &str, size: (u32, u32)) -> Self {
+        Self {
+            clouds: Target::new(
+                device,
+                &format!("nimbus {label} (L, T)"),
+                size,
+                wgpu::TextureFormat::Rgba16Float,
+            ),
+            depth: Target::new(
+                device,
+                &format!("nimbus {label} depth"),
+                size,
+                wgpu::TextureFormat::Rgba32Float,
+            ),
+        }
+    }
+}
+
+pub(crate) struct TemporalPipeline {
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::ComputePipeline,
+}
+
+impl TemporalPipeline {
+    pub(crate) fn new(device: &wgpu::Device, kind: DepthKind) -> Self {
+        use wgpu::TextureSampleType as S;
+        let texture = |binding, sample_type| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Texture {
+                sample_type,
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            count: None,
+        };
+        let storage = |binding, format| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::WriteOnly,
+                format,
+                view_dimension: wgpu::TextureViewDimension::D2,
+            },
+            count: None,
+        };
+        let unfiltered = S::Float { filterable: false };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("nimbus temporal"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: wgpu::BufferSize::new(
+                            std::mem::size_of::<TemporalUniforms>() as u64,
+                        ),
+                    },
+                    count: None,
+                },
+                texture(1, unfiltered),
+                texture(2, unfiltered),
+                texture(3, unfiltered),
+                texture(4, unfiltered),
+                texture(
+                    5,
+                    match kind {
+                        DepthKind::Depth => S::Depth,
+                        DepthKind::R32Float => unfiltered,
+                    },
+                ),
+                storage(6, wgpu::TextureFormat::Rgba16Float),
+                storage(7, wgpu::TextureFormat::Rgba32Float),
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("nimbus temporal"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("nimbus temporal"),
+            source: wgpu::ShaderSource::Wgsl(pass_source("temporal", kind).into()),
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("nimbus temporal"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("resolve"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        Self { layout, pipeline }
+    }
+
+    /// Records the resolve of `fresh` and `history` into `out` over a `grid`-sized dispatch.
+    #[allow(clippy::too_many_arguments)]
+    pub(crate) fn record(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        uniforms: &wgpu::Buffer,
+        fresh: &CloudImage,
+        history: &CloudImage,
+        scene_depth: &wgpu::TextureView,
+        out: &CloudImage,
+        grid: (u32, u32),
+        timer: Option<&super::timing::GpuTimer>,
+    ) {
+        let tex = |binding, view| wgpu::BindGroupEntry {
+            binding,
+            resource: wgpu::BindingResource::TextureView(view),
+        };
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("nimbus temporal"),
+            layout: &self.layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: uniforms.as_entire_binding(),
+                },
+                tex(1, &fresh.clouds.view),
+                tex(2, &fresh.depth.view),
+                tex(3, &history.clouds.view),
+                tex(4, &history.depth.view),
+                tex(5, scene_depth),
+                tex(6, &out.clouds.view),
+                tex(7, &out.depth.view),
+            ],
+        });
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("nimbus temporal"),
+            timestamp_writes: timer.map(|t| {
+                let (begin, end) = t.writes(super::timing::Pass::Resolve);
+                wgpu::ComputePassTimestampWrites {
+                    query_set: &t.query_set,
+                    beginning_of_pass_write_index: begin,
+                    end_of_pass_write_index: end,
+                }
+            }),
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &bind, &[]);
+        pass.dispatch_workgroups(grid.0.div_ceil(8), grid.1.div_ceil(8), 1);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn uniforms_match_the_wgsl_struct_size() {
+        assert_eq!(std::mem::size_of::<TemporalUniforms>(), 2 * 64 + 4 * 16);
+        let src = pass_source("temporal", DepthKind::Depth);
+        let start = src.find("struct TemporalUniforms").unwrap();
+        let body = &src[start..start + src[start..].find('}').unwrap()];
+        assert_eq!(body.matches(": vec4f").count(), 4);
+        assert_eq!(body.matches(": mat4x4f").count(), 2);
+    }
+}

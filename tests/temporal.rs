@@ -1,0 +1,248 @@
+//! Temporal reprojection and the march optimisations, on software Vulkan: settling to the full
+//! march exactly, rejecting history on camera cuts, keeping occluders exact under motion, and
+//! each optimisation staying close to the plain march.
+
+mod common;
+
+use common::{f16, headless, quiet, small_noise, H, W};
+use nimbus::demo::{standard_views, DemoView, Occluder};
+use nimbus::glam::Vec3;
+use nimbus::{Headless, Settings, Temporal, TracePattern};
+
+/// Jitter off (so repeated samples of a pixel agree) with temporal reprojection on.
+fn steady(pattern: TracePattern) -> Settings {
+    let mut s = quiet(small_noise(1));
+    s.march.temporal = Temporal {
+        enabled: true,
+        pattern,
+        ..Temporal::default()
+    };
+    s
+}
+
+fn show(h: &mut Headless, view: &DemoView, time: f64) {
+    let scene = view.scene(W, H);
+    h.upload_scene(&scene.color, Some(&scene.depth)).unwrap();
+    h.render(&view.frame(W, H, time)).unwrap();
+}
+
+fn worst_difference(a: &[[f32; 4]], b: &[[f32; 4]]) -> f32 {
+    a.iter()
+        .zip(b)
+        .flat_map(|(x, y)| (0..4).map(move |c| (x[c] - y[c]).abs() / x[c].abs().max(1.0)))
+        .fold(0.0, f32::max)
+}
+
+fn mean_difference(a: &[[f32; 4]], b: &[[f32; 4]]) -> f64 {
+    let sum: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (0..3).map(|c| (x[c] - y[c]).abs() as f64).sum::<f64>() / 3.0)
+        .sum();
+    sum / a.len() as f64
+}
+
+/// The full march of one frame, every pixel traced.
+fn full_march(view: &DemoView) -> Vec<[f32; 4]> {
+    let mut h = headless(quiet(small_noise(1)));
+    show(&mut h, view, 0.0);
+    h.read_clouds().unwrap()
+}
+
+#[test]
+fn a_static_view_settles_to_the_full_march() {
+    let view = standard_views()[0];
+    let full = full_march(&view);
+    for pattern in [TracePattern::OneIn4, TracePattern::OneIn16] {
+        let block = pattern.block();
+        let mut h = headless(steady(pattern));
+        show(&mut h, &view, 0.0);
+        // Frame 0 traces the pixels at offset (0, 0) of each block: those are exact already.
+        let first = h.read_clouds().unwrap();
+        for y in (0..H).step_by(block as usize) {
+            for x in (0..W).step_by(block as usize) {
+                let i = (y * W + x) as usize;
+                assert_eq!(first[i], full[i], "{pattern:?}: traced pixel ({x}, {y})");
+            }
+        }
+        // The others are interpolated, so frame 0 is close but not equal.
+        assert!(worst_difference(&first, &full) > 0.0);
+        // After one pass over the block every pixel has its own sample; with the jitter off
+        // all samples of a pixel agree, so the average is the full march (to f16 rounding).
+        for _ in 1..block * block {
+            show(&mut h, &view, 0.0);
+        }
+        let settled = h.read_clouds().unwrap();
+        let worst = worst_difference(&full, &settled);
+        assert!(
+            worst < 2e-3,
+            "{pattern:?}: settled image differs by {worst}"
+        );
+        // And it stays there.
+        for _ in 0..3 {
+            show(&mut h, &view, 0.0);
+        }
+        let later = h.read_clouds().unwrap();
+        assert!(
+            worst_difference(&full, &later) < 2e-3,
+            "{pattern:?}: drifted"
+        );
+    }
+}
+
+#[test]
+fn a_camera_cut_drops_the_history_like_a_reset() {
+    // Settle on one view, then turn round: nothing of the old view may survive. The reference
+    // is a renderer that saw the same number of frames but was reset before the cut, so both
+    // trace the same pixels in the frame after it.
+    let a = standard_views()[1]; // toward the horizon
+    let mut b = a;
+    b.target = a.eye * 2.0 - a.target; // the opposite direction
+    let frames = 5;
+    let mut cut = headless(steady(TracePattern::OneIn16));
+    let mut reset = headless(steady(TracePattern::OneIn16));
+    for _ in 0..frames {
+        show(&mut cut, &a, 0.0);
+        show(&mut reset, &a, 0.0);
+    }
+    reset.renderer_mut().reset_history();
+    show(&mut cut, &b, 0.0);
+    show(&mut reset, &b, 0.0);
+    assert_eq!(cut.read_clouds().unwrap(), reset.read_clouds().unwrap());
+    assert_eq!(cut.read_output().unwrap(), reset.read_output().unwrap());
+    // Without the cut, the same renderer keeps its history (the images differ).
+    show(&mut cut, &b, 0.0);
+    reset.renderer_mut().reset_history();
+    show(&mut reset, &b, 0.0);
+    assert_ne!(cut.read_clouds().unwrap(), reset.read_clouds().unwrap());
+}
+
+#[test]
+fn occluders_stay_exact_and_motion_does_not_smear() {
+    // A wall 400 m away covers the lower third while the camera pans: pixels on the wall must
+    // stay exactly the scene, and the panned image must stay close to the full march.
+    let mut view = standard_views()[4];
+    view.occluder = Occluder::NearWall {
+        distance: 400.0,
+        fraction: 0.3,
+    };
+    let mut h = headless(steady(TracePattern::OneIn16));
+    let forward = view.target - view.eye;
+    let mut last = view;
+    for k in 0..20 {
+        let yaw = (1.5 * k as f32).to_radians();
+        last.target = view.eye + glam_rotate_y(forward, yaw);
+        show(&mut h, &last, k as f64 / 30.0);
+        let scene = last.scene(W, H);
+        let out = h.read_output().unwrap();
+        for (i, depth) in scene.depth.iter().enumerate() {
+            if *depth < 1.0 {
+                assert_eq!(
+                    out[i],
+                    scene.color[i].map(f16),
+                    "frame {k}: pixel {i} on the wall"
+                );
+            }
+        }
+    }
+    let mut full = headless(quiet(small_noise(1)));
+    let scene = last.scene(W, H);
+    full.upload_scene(&scene.color, Some(&scene.depth)).unwrap();
+    full.render(&last.frame(W, H, 19.0 / 30.0)).unwrap();
+    let mean = mean_difference(&full.read_output().unwrap(), &h.read_output().unwrap());
+    assert!(
+        mean < 0.02,
+        "panned image differs from the full march by {mean}"
+    );
+}
+
+fn glam_rotate_y(v: Vec3, angle: f32) -> Vec3 {
+    nimbus::glam::Quat::from_rotation_y(angle) * v
+}
+
+/// Turns one optimisation on.
+type SwitchOn = fn(&mut Settings);
+
+#[test]
+fn each_optimisation_stays_close_to_the_plain_march() {
+    let view = standard_views()[0];
+    let plain = {
+        let mut s = quiet(small_noise(1));
+        s.march.coarse_then_fine = false;
+        s.march.distance_steps = false;
+        s.march.noise_lod = false;
+        s.lighting.light_lod = false;
+        s
+    };
+    let mut h = headless(plain.clone());
+    show(&mut h, &view, 0.0);
+    let reference = h.read_output().unwrap();
+    let plain_samples = h.read_ray_stats().unwrap();
+    let switches: [(&str, SwitchOn); 4] = [
+        ("coarse_then_fine", |s| s.march.coarse_then_fine = true),
+        ("distance_steps", |s| s.march.distance_steps = true),
+        ("noise_lod", |s| s.march.noise_lod = true),
+        ("light_lod", |s| s.lighting.light_lod = true),
+    ];
+    for (name, switch_on) in switches {
+        let mut s = plain.clone();
+        switch_on(&mut s);
+        h.renderer_mut().set_settings(s).unwrap();
+        show(&mut h, &view, 0.0);
+        let got = h.read_output().unwrap();
+        let mean = mean_difference(&reference, &got);
+        assert!(mean < 0.01, "{name}: mean difference {mean}");
+        assert!(got.iter().flatten().all(|v| v.is_finite()), "{name}: NaN");
+        let stats = h.read_ray_stats().unwrap();
+        if name == "coarse_then_fine" {
+            // Empty space is probed in long steps: far fewer density samples per ray.
+            assert!(
+                stats.mean_samples < 0.7 * plain_samples.mean_samples,
+                "{stats:?} vs {plain_samples:?}"
+            );
+        }
+        if name == "light_lod" {
+            assert!(stats.mean_light_samples <= plain_samples.mean_light_samples);
+        }
+    }
+}
+
+#[test]
+fn ray_counters_count_the_traced_pixels() {
+    let view = standard_views()[0];
+    let mut h = headless(steady(TracePattern::OneIn16));
+    show(&mut h, &view, 0.0);
+    let stats = h.read_ray_stats().unwrap();
+    assert_eq!(stats.rays, (W.div_ceil(4) * H.div_ceil(4)) as u64);
+    assert!(
+        stats.mean_samples > 1.0 && stats.mean_light_samples > 1.0,
+        "{stats:?}"
+    );
+    let mut h = headless(quiet(small_noise(1)));
+    show(&mut h, &view, 0.0);
+    assert_eq!(h.read_ray_stats().unwrap().rays, (W * H) as u64);
+    // Looking down from far above an empty sky: no layer crossed, no samples.
+    let mut clear = quiet(small_noise(1));
+    clear.weather = nimbus::Weather::clear();
+    h.renderer_mut().set_settings(clear).unwrap();
+    show(&mut h, &view, 0.0);
+    assert_eq!(h.read_ray_stats().unwrap().mean_samples, 0.0);
+}
+
+#[test]
+fn tiny_outputs_and_size_changes_work_with_temporal() {
+    // Outputs smaller than the 4x4 block leave some frames without a traced pixel; resizes
+    // reallocate the history. Neither may fail or produce NaN.
+    let mut h = headless(steady(TracePattern::OneIn16));
+    let view = standard_views()[0];
+    for (w, hh) in [(1, 1), (3, 2), (W, H), (5, 7)] {
+        h.resize(w, hh).unwrap();
+        for _ in 0..5 {
+            let scene = view.scene(w, hh);
+            h.upload_scene(&scene.color, Some(&scene.depth)).unwrap();
+            h.render(&view.frame(w, hh, 0.0)).unwrap();
+            let out = h.read_output().unwrap();
+            assert!(out.iter().flatten().all(|v| v.is_finite()), "{w}x{hh}: NaN");
+        }
+    }
+}
