@@ -21,7 +21,7 @@ struct MarchUniforms {
     misc: vec4f,            // 1/haze fade distance, phase model, debug mode, has depth (0/1)
     debug: vec4f,           // slab bottom, slab top, debug density, unused
     debug_sphere: vec4f,    // sphere center xyz, radius
-    tangent_x: vec4f,       // world-space horizontal axis for the weather map, w: frame index
+    tangent_x: vec4f,       // world-space horizontal axis for the weather map, w: unused
     tangent_z: vec4f,       // second horizontal axis, w: trace resolution divisor (1, 2, 4)
     layer_types: vec4f,     // cloud type of layers 1-3, w: weight of the "to" weather map
     horizon: vec4f,         // horizon gradient: strength, start distance (m), coverage, type

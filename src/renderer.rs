@@ -417,15 +417,7 @@ impl Renderer {
         let (camera, sun_dir) = frame.validate()?;
         let sample = self.timeline.sample(frame.time);
         self.last_time = frame.time;
-        let march = MarchUniforms::new(
-            &self.settings,
-            &sample,
-            frame,
-            &camera,
-            sun_dir,
-            self.frame_index,
-            false,
-        );
+        let march = MarchUniforms::new(&self.settings, &sample, frame, &camera, sun_dir, false);
         let composite = CompositeUniforms::new(
             camera.inv_view_proj,
             camera.position,

@@ -1,4 +1,5 @@
-//! Small helpers for the init-time compute passes (noise bake, weather bake and blend).
+//! Compute-pass helpers: the init-time passes (noise bake, weather bake and blend) and the
+//! per-frame ones (march, temporal resolve).
 
 use wgpu::util::DeviceExt;
 
@@ -75,4 +76,114 @@ pub(crate) fn map_texture(device: &wgpu::Device, label: &str, size: u32) -> wgpu
         wgpu::TextureFormat::Rgba8Unorm,
         U::TEXTURE_BINDING | U::STORAGE_BINDING | U::COPY_SRC,
     )
+}
+
+/// A compute-stage sampled-texture layout entry.
+pub(crate) fn texture_entry(
+    binding: u32,
+    sample_type: wgpu::TextureSampleType,
+    dim: wgpu::TextureViewDimension,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Texture {
+            sample_type,
+            view_dimension: dim,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
+/// A compute-stage write-only 2D storage-texture layout entry.
+pub(crate) fn storage_entry(
+    binding: u32,
+    format: wgpu::TextureFormat,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::StorageTexture {
+            access: wgpu::StorageTextureAccess::WriteOnly,
+            format,
+            view_dimension: wgpu::TextureViewDimension::D2,
+        },
+        count: None,
+    }
+}
+
+/// A compute-stage uniform-buffer layout entry for a `T`.
+pub(crate) fn uniform_entry<T>(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Uniform,
+            has_dynamic_offset: false,
+            min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<T>() as u64),
+        },
+        count: None,
+    }
+}
+
+/// A per-frame compute pass with an explicit layout (so one pipeline serves every frame's bind
+/// group): the layout from `entries`, the module from `pass` with its depth-binding variant.
+pub(crate) fn frame_pipeline(
+    device: &wgpu::Device,
+    label: &str,
+    pass: &str,
+    kind: DepthKind,
+    entry: &str,
+    entries: &[wgpu::BindGroupLayoutEntry],
+) -> (wgpu::BindGroupLayout, wgpu::ComputePipeline) {
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some(label),
+        entries,
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some(label),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some(label),
+        source: wgpu::ShaderSource::Wgsl(pass_source(pass, kind).into()),
+    });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some(label),
+        layout: Some(&pipeline_layout),
+        module: &module,
+        entry_point: Some(entry),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    (layout, pipeline)
+}
+
+/// Records one 8×8-workgroup dispatch over `size` invocations, with timestamps for `which`
+/// when a timer is given.
+pub(crate) fn timed_dispatch(
+    encoder: &mut wgpu::CommandEncoder,
+    label: &str,
+    pipeline: &wgpu::ComputePipeline,
+    bind: &wgpu::BindGroup,
+    size: (u32, u32),
+    timer: Option<&super::timing::GpuTimer>,
+    which: super::timing::Pass,
+) {
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some(label),
+        timestamp_writes: timer.map(|t| {
+            let (begin, end) = t.writes(which);
+            wgpu::ComputePassTimestampWrites {
+                query_set: &t.query_set,
+                beginning_of_pass_write_index: begin,
+                end_of_pass_write_index: end,
+            }
+        }),
+    });
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, bind, &[]);
+    pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
 }

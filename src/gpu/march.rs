@@ -4,8 +4,9 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec2, Mat4, Vec3};
 
+use super::compute::{frame_pipeline, storage_entry, texture_entry, timed_dispatch, uniform_entry};
 use super::noise::NoiseTextures;
-use super::shaders::{pass_source, DepthKind};
+use super::shaders::DepthKind;
 use crate::frame::{CameraDerived, FrameInputs};
 use crate::settings::{DebugDensity, Settings};
 use crate::weather::WeatherSample;
@@ -68,7 +69,6 @@ impl MarchUniforms {
         frame: &FrameInputs,
         cam: &CameraDerived,
         sun_dir: Vec3,
-        frame_index: u32,
         has_depth: bool,
     ) -> Self {
         let up = settings.planet.up.normalize();
@@ -159,7 +159,7 @@ impl MarchUniforms {
             misc: [inv_fade, phase_model as f32, debug_mode, flag(has_depth)],
             debug,
             debug_sphere: sphere,
-            tangent_x: v4(tx, (frame_index % 1024) as f32),
+            tangent_x: v4(tx, 0.0),
             tangent_z: v4(tz, s.march.resolution.divisor() as f32),
             layer_types: types,
             horizon: [
@@ -234,36 +234,6 @@ pub(crate) struct MarchPipeline {
     pub pipeline: wgpu::ComputePipeline,
 }
 
-fn texture_entry(
-    binding: u32,
-    sample_type: wgpu::TextureSampleType,
-    dim: wgpu::TextureViewDimension,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Texture {
-            sample_type,
-            view_dimension: dim,
-            multisampled: false,
-        },
-        count: None,
-    }
-}
-
-fn storage_entry(binding: u32, format: wgpu::TextureFormat) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::StorageTexture {
-            access: wgpu::StorageTextureAccess::WriteOnly,
-            format,
-            view_dimension: wgpu::TextureViewDimension::D2,
-        },
-        count: None,
-    }
-}
-
 impl MarchPipeline {
     pub(crate) fn new(device: &wgpu::Device, kind: DepthKind) -> Self {
         use wgpu::TextureSampleType as S;
@@ -273,21 +243,14 @@ impl MarchPipeline {
             DepthKind::Depth => S::Depth,
             DepthKind::R32Float => S::Float { filterable: false },
         };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("nimbus march"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: wgpu::BufferSize::new(
-                            std::mem::size_of::<MarchUniforms>() as u64,
-                        ),
-                    },
-                    count: None,
-                },
+        let (layout, pipeline) = frame_pipeline(
+            device,
+            "nimbus march",
+            "march",
+            kind,
+            "march",
+            &[
+                uniform_entry::<MarchUniforms>(0),
                 texture_entry(1, filterable, D::D3),
                 texture_entry(2, filterable, D::D3),
                 texture_entry(3, filterable, D::D2),
@@ -303,24 +266,7 @@ impl MarchPipeline {
                 storage_entry(8, wgpu::TextureFormat::Rgba32Float),
                 texture_entry(9, filterable, D::D2),
             ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("nimbus march"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("nimbus march"),
-            source: wgpu::ShaderSource::Wgsl(pass_source("march", kind).into()),
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("nimbus march"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("march"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        );
         Self { layout, pipeline }
     }
 
@@ -365,26 +311,22 @@ impl MarchPipeline {
                 tex(9, weather.1),
             ],
         });
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("nimbus march"),
-            timestamp_writes: timer.map(|t| {
-                let (begin, end) = t.writes(super::timing::Pass::March);
-                wgpu::ComputePassTimestampWrites {
-                    query_set: &t.query_set,
-                    beginning_of_pass_write_index: begin,
-                    end_of_pass_write_index: end,
-                }
-            }),
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &bind, &[]);
-        pass.dispatch_workgroups(size.0.div_ceil(8), size.1.div_ceil(8), 1);
+        timed_dispatch(
+            encoder,
+            "nimbus march",
+            &self.pipeline,
+            &bind,
+            size,
+            timer,
+            super::timing::Pass::March,
+        );
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gpu::shaders::pass_source;
 
     #[test]
     fn uniforms_match_the_wgsl_struct_size() {

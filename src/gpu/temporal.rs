@@ -4,7 +4,8 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
-use super::shaders::{pass_source, DepthKind};
+use super::compute::{frame_pipeline, storage_entry, texture_entry, timed_dispatch, uniform_entry};
+use super::shaders::DepthKind;
 
 /// Layout must match `TemporalUniforms` in shaders/temporal.wgsl.
 #[repr(C)]
@@ -114,42 +115,18 @@ pub(crate) struct TemporalPipeline {
 impl TemporalPipeline {
     pub(crate) fn new(device: &wgpu::Device, kind: DepthKind) -> Self {
         use wgpu::TextureSampleType as S;
-        let texture = |binding, sample_type| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Texture {
-                sample_type,
-                view_dimension: wgpu::TextureViewDimension::D2,
-                multisampled: false,
-            },
-            count: None,
-        };
-        let storage = |binding, format| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::StorageTexture {
-                access: wgpu::StorageTextureAccess::WriteOnly,
-                format,
-                view_dimension: wgpu::TextureViewDimension::D2,
-            },
-            count: None,
+        let texture = |binding, sample_type| {
+            texture_entry(binding, sample_type, wgpu::TextureViewDimension::D2)
         };
         let unfiltered = S::Float { filterable: false };
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("nimbus temporal"),
-            entries: &[
-                wgpu::BindGroupLayoutEntry {
-                    binding: 0,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: false,
-                        min_binding_size: wgpu::BufferSize::new(
-                            std::mem::size_of::<TemporalUniforms>() as u64,
-                        ),
-                    },
-                    count: None,
-                },
+        let (layout, pipeline) = frame_pipeline(
+            device,
+            "nimbus temporal",
+            "temporal",
+            kind,
+            "resolve",
+            &[
+                uniform_entry::<TemporalUniforms>(0),
                 texture(1, unfiltered),
                 texture(2, unfiltered),
                 texture(3, unfiltered),
@@ -161,27 +138,10 @@ impl TemporalPipeline {
                         DepthKind::R32Float => unfiltered,
                     },
                 ),
-                storage(6, wgpu::TextureFormat::Rgba16Float),
-                storage(7, wgpu::TextureFormat::Rgba32Float),
+                storage_entry(6, wgpu::TextureFormat::Rgba16Float),
+                storage_entry(7, wgpu::TextureFormat::Rgba32Float),
             ],
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("nimbus temporal"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("nimbus temporal"),
-            source: wgpu::ShaderSource::Wgsl(pass_source("temporal", kind).into()),
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("nimbus temporal"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("resolve"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        );
         Self { layout, pipeline }
     }
 
@@ -220,26 +180,22 @@ impl TemporalPipeline {
                 tex(7, &out.depth.view),
             ],
         });
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("nimbus temporal"),
-            timestamp_writes: timer.map(|t| {
-                let (begin, end) = t.writes(super::timing::Pass::Resolve);
-                wgpu::ComputePassTimestampWrites {
-                    query_set: &t.query_set,
-                    beginning_of_pass_write_index: begin,
-                    end_of_pass_write_index: end,
-                }
-            }),
-        });
-        pass.set_pipeline(&self.pipeline);
-        pass.set_bind_group(0, &bind, &[]);
-        pass.dispatch_workgroups(grid.0.div_ceil(8), grid.1.div_ceil(8), 1);
+        timed_dispatch(
+            encoder,
+            "nimbus temporal",
+            &self.pipeline,
+            &bind,
+            grid,
+            timer,
+            super::timing::Pass::Resolve,
+        );
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gpu::shaders::pass_source;
 
     #[test]
     fn uniforms_match_the_wgsl_struct_size() {
