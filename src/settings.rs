@@ -613,6 +613,20 @@ mod tests {
     }
 
     #[test]
+    fn light_step_growth_is_range_checked() {
+        for bad in [0.5, 4.5, f32::NAN] {
+            let mut s = Settings::default();
+            s.lighting.light_step_growth = bad;
+            assert_eq!(refused(&s), "lighting.light_step_growth");
+        }
+        let mut s = Settings::default();
+        s.lighting.light_step_growth = 1.0; // uniform steps are allowed
+        s.validate().unwrap();
+        s.lighting.light_steps = 129;
+        assert_eq!(refused(&s), "lighting.light_steps");
+    }
+
+    #[test]
     fn sizes_must_be_powers_of_two() {
         let mut s = Settings::default();
         s.noise.base_size = 100;
