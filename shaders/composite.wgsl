@@ -12,7 +12,9 @@ struct CompositeUniforms {
 
 @group(0) @binding(0) var clouds: texture_2d<f32>;
 @group(0) @binding(2) var cloud_depth: texture_2d<f32>;
-@group(0) @binding(3) var<uniform> cu: CompositeUniforms;
+// Per-frame parameters: a read-only storage buffer, not a uniform (lavapipe compiles a shader
+// variant per distinct uniform value; see FRAME_PARAMS_USAGE in src/gpu/compute.rs).
+@group(0) @binding(3) var<storage, read> cu: CompositeUniforms;
 //!SCENE_DEPTH_BINDING(4)
 
 @vertex

@@ -32,7 +32,9 @@ struct MarchUniforms {
     opts: vec4f,            // coarse-then-fine, distance-grown steps, noise LOD, light LOD (0/1)
 }
 
-@group(0) @binding(0) var<uniform> u: MarchUniforms;
+// Per-frame parameters: a read-only storage buffer, not a uniform (lavapipe compiles a shader
+// variant per distinct uniform value; see FRAME_PARAMS_USAGE in src/gpu/compute.rs).
+@group(0) @binding(0) var<storage, read> u: MarchUniforms;
 @group(0) @binding(1) var base_tex: texture_3d<f32>;
 @group(0) @binding(2) var detail_tex: texture_3d<f32>;
 @group(0) @binding(3) var weather_from: texture_2d<f32>;

@@ -23,7 +23,9 @@ struct TemporalUniforms {
     misc: vec4f,     // has scene depth (0/1), far depth value, max distance (m), unused
 }
 
-@group(0) @binding(0) var<uniform> tu: TemporalUniforms;
+// Per-frame parameters: a read-only storage buffer, not a uniform (lavapipe compiles a shader
+// variant per distinct uniform value; see FRAME_PARAMS_USAGE in src/gpu/compute.rs).
+@group(0) @binding(0) var<storage, read> tu: TemporalUniforms;
 // This frame's sparse march: (L, T), and (cloud depth, scene distance, samples, light samples).
 @group(0) @binding(1) var fresh_clouds: texture_2d<f32>;
 @group(0) @binding(2) var fresh_depth: texture_2d<f32>;

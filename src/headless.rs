@@ -16,12 +16,16 @@ use crate::settings::Settings;
 /// Largest edge Headless accepts for its targets.
 pub const MAX_HEADLESS_SIZE: u32 = 8192;
 
+/// The targets and their views, made once per size: a frame makes no views.
 struct OwnedTargets {
     width: u32,
     height: u32,
     scene: wgpu::Texture,
     depth: wgpu::Texture,
     output: wgpu::Texture,
+    scene_view: wgpu::TextureView,
+    depth_view: wgpu::TextureView,
+    output_view: wgpu::TextureView,
     has_depth: bool,
 }
 
@@ -34,6 +38,81 @@ pub struct RayStats {
     pub mean_samples: f64,
     /// Density samples per ray toward the sun.
     pub mean_light_samples: f64,
+}
+
+/// Live wgpu objects on a device and the GPU memory wgpu has allocated for them, from wgpu's
+/// internal counters. On a [`Headless`] device every object is Nimbus's own.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LiveObjects {
+    /// Buffers alive.
+    pub buffers: isize,
+    /// Textures alive.
+    pub textures: isize,
+    /// Texture views alive.
+    pub texture_views: isize,
+    /// Bind groups alive.
+    pub bind_groups: isize,
+    /// Render and compute pipelines alive.
+    pub pipelines: isize,
+    /// Shader modules alive.
+    pub shader_modules: isize,
+    /// Command encoders alive (0 between frames).
+    pub command_encoders: isize,
+    /// Bytes of GPU memory held by buffers.
+    pub buffer_memory: isize,
+    /// Bytes of GPU memory held by textures.
+    pub texture_memory: isize,
+}
+
+impl LiveObjects {
+    /// Reads the counters of `device`.
+    pub fn of(device: &wgpu::Device) -> Self {
+        let c = device.get_internal_counters().hal;
+        Self {
+            buffers: c.buffers.read(),
+            textures: c.textures.read(),
+            texture_views: c.texture_views.read(),
+            bind_groups: c.bind_groups.read(),
+            pipelines: c.render_pipelines.read() + c.compute_pipelines.read(),
+            shader_modules: c.shader_modules.read(),
+            command_encoders: c.command_encoders.read(),
+            buffer_memory: c.buffer_memory.read(),
+            texture_memory: c.texture_memory.read(),
+        }
+    }
+
+    /// The counts of objects Nimbus creates: buffers, texture views, bind groups, pipelines,
+    /// shader modules. Left out: memory (it follows the target size); textures (wgpu-hal 30's
+    /// Vulkan backend counts only their destruction, so that number only falls); command
+    /// encoders (wgpu pools and reuses them).
+    pub fn counts(&self) -> [isize; 5] {
+        [
+            self.buffers,
+            self.texture_views,
+            self.bind_groups,
+            self.pipelines,
+            self.shader_modules,
+        ]
+    }
+}
+
+impl std::fmt::Display for LiveObjects {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "buffers {} textures {} views {} bind groups {} pipelines {} shaders {} encoders {} \
+             (memory: buffers {} KiB, textures {} KiB)",
+            self.buffers,
+            self.textures,
+            self.texture_views,
+            self.bind_groups,
+            self.pipelines,
+            self.shader_modules,
+            self.command_encoders,
+            self.buffer_memory / 1024,
+            self.texture_memory / 1024
+        )
+    }
 }
 
 /// A renderer with its own device and targets: scene color (RGBA16F), scene depth (R32F,
@@ -213,25 +292,33 @@ impl Headless {
         };
         use wgpu::TextureUsages as U;
         let color_usage = U::TEXTURE_BINDING | U::RENDER_ATTACHMENT | U::COPY_DST | U::COPY_SRC;
-        let targets = crate::renderer::gpu_scope(&self.device, || OwnedTargets {
-            width,
-            height,
-            scene: make(
+        let targets = crate::renderer::gpu_scope(&self.device, || {
+            let scene = make(
                 "nimbus scene color",
                 wgpu::TextureFormat::Rgba16Float,
                 color_usage,
-            ),
-            depth: make(
+            );
+            let depth = make(
                 "nimbus scene depth",
                 wgpu::TextureFormat::R32Float,
                 U::TEXTURE_BINDING | U::COPY_DST,
-            ),
-            output: make(
+            );
+            let output = make(
                 "nimbus output",
                 wgpu::TextureFormat::Rgba16Float,
                 color_usage,
-            ),
-            has_depth: false,
+            );
+            OwnedTargets {
+                width,
+                height,
+                scene_view: scene.create_view(&Default::default()),
+                depth_view: depth.create_view(&Default::default()),
+                output_view: output.create_view(&Default::default()),
+                scene,
+                depth,
+                output,
+                has_depth: false,
+            }
         })?;
         self.targets = Some(targets);
         Ok(())
@@ -309,18 +396,17 @@ impl Headless {
     /// Renders one frame and waits for it. Returns the wall time from submit to completion.
     pub fn render(&mut self, frame: &FrameInputs) -> Result<Duration> {
         self.renderer.prepare(frame)?;
-        let t = self.targets()?;
-        let scene_view = t.scene.create_view(&Default::default());
-        let output_view = t.output.create_view(&Default::default());
-        let depth_view = t
-            .has_depth
-            .then(|| t.depth.create_view(&Default::default()));
+        // The field, not `targets()`: the renderer is borrowed mutably beside it.
+        let t = self
+            .targets
+            .as_ref()
+            .ok_or_else(|| invalid_target("output", "no targets yet: call resize() first"))?;
         let color = if self.in_place {
-            ColorTargets::InPlace(&scene_view)
+            ColorTargets::InPlace(&t.scene_view)
         } else {
             ColorTargets::Separate {
-                scene: &scene_view,
-                output: &output_view,
+                scene: &t.scene_view,
+                output: &t.output_view,
             }
         };
         let mut encoder = self
@@ -332,7 +418,7 @@ impl Headless {
             &mut encoder,
             &Targets {
                 color,
-                depth: depth_view.as_ref(),
+                depth: t.has_depth.then_some(&t.depth_view),
             },
         )?;
         let start = Instant::now();
@@ -440,6 +526,11 @@ impl Headless {
             read_texture(&self.device, &self.queue, from, 0)?,
             read_texture(&self.device, &self.queue, to, 0)?,
         ))
+    }
+
+    /// Live wgpu objects on the owned device (all of them Nimbus's) and their GPU memory.
+    pub fn live_objects(&self) -> LiveObjects {
+        LiveObjects::of(&self.device)
     }
 
     /// The renderer.

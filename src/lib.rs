@@ -38,7 +38,7 @@ pub use error::{Error, Result};
 pub use frame::{Camera, DepthConvention, FrameInputs, Sun};
 pub use gpu::noise::NoiseVolume;
 pub use gpu::timing::PassTimes;
-pub use headless::{Headless, RayStats};
+pub use headless::{Headless, LiveObjects, RayStats};
 pub use renderer::{ColorTargets, Renderer, Targets};
 pub use settings::{DebugDensity, Quality, Settings, Temporal, TracePattern};
 pub use weather::{Preset, Weather};

@@ -290,19 +290,19 @@ impl Renderer {
             let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("nimbus march uniforms"),
                 size: std::mem::size_of::<MarchUniforms>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                usage: crate::gpu::compute::FRAME_PARAMS_USAGE,
                 mapped_at_creation: false,
             });
             let temporal_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("nimbus temporal uniforms"),
                 size: std::mem::size_of::<TemporalUniforms>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                usage: crate::gpu::compute::FRAME_PARAMS_USAGE,
                 mapped_at_creation: false,
             });
             let composite_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("nimbus composite uniforms"),
                 size: std::mem::size_of::<CompositeUniforms>() as u64,
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                usage: crate::gpu::compute::FRAME_PARAMS_USAGE,
                 mapped_at_creation: false,
             });
             let no_depth = crate::gpu::texture_2d(
@@ -344,35 +344,50 @@ impl Renderer {
         &self.settings
     }
 
-    /// Replaces the settings; re-bakes the noise only when its seed or sizes changed. A
-    /// different `settings.weather` takes effect at once (no transition; the wind carries on
-    /// from where it is): use [`Renderer::set_weather`] for a smooth change. On error nothing
-    /// changes.
+    /// Replaces the settings. Re-bakes the noise volumes and blue noise only when their seed
+    /// or sizes changed (tile scales are uniforms and cost nothing), and regenerates the
+    /// weather maps only when `settings.weather` or the map size changed. A different
+    /// `settings.weather` takes effect at once (no transition; the wind carries on from where
+    /// it is): use [`Renderer::set_weather`] for a smooth change. The new textures are built
+    /// beside the old ones and swapped in only once the GPU has accepted the work: on error
+    /// nothing changes.
     pub fn set_settings(&mut self, settings: Settings) -> Result<()> {
         settings.validate()?;
         let (device, queue) = (self.device.clone(), self.queue.clone());
-        let noise_changed = settings.noise != self.settings.noise;
-        let map_size_changed = settings.noise.weather_size != self.settings.noise.weather_size;
-        let weather_changed = settings.weather != self.settings.weather;
-        gpu_scope(&device, || {
-            if noise_changed {
-                self.noise = NoiseTextures::new(&device, &queue, &settings.noise);
-            }
-            if map_size_changed {
-                self.weather_maps = WeatherMaps::new(
-                    &device,
-                    &queue,
-                    settings.noise.weather_size,
-                    &settings.weather,
-                );
-            } else if weather_changed {
-                self.weather_maps.reset(&device, &queue, &settings.weather);
-            }
-            if weather_changed || map_size_changed {
-                self.timeline
-                    .replace(settings.weather.clone(), self.last_time);
-            }
+        let (old, new) = (&self.settings.noise, &settings.noise);
+        let bake_changed = (
+            old.seed,
+            old.base_size,
+            old.detail_size,
+            old.blue_noise_size,
+        ) != (
+            new.seed,
+            new.base_size,
+            new.detail_size,
+            new.blue_noise_size,
+        );
+        let map_changed =
+            settings.weather != self.settings.weather || new.weather_size != old.weather_size;
+        let (noise, maps) = gpu_scope(&device, || {
+            let noise = bake_changed.then(|| NoiseTextures::new(&device, &queue, new));
+            let maps = map_changed.then(|| {
+                self.weather_maps
+                    .rebuilt(&device, &queue, new.weather_size, &settings.weather)
+            });
+            (noise, maps)
         })?;
+        if let Some(noise) = noise {
+            self.noise = noise;
+        }
+        if let Some(maps) = maps {
+            self.weather_maps = maps;
+            self.timeline
+                .replace(settings.weather.clone(), self.last_time);
+        }
+        if bake_changed || map_changed {
+            // Cached bind groups hold the replaced textures' views.
+            self.clear_bind_groups();
+        }
         self.settings = settings;
         // Accumulated history was rendered with the old settings.
         self.reset_history();
@@ -465,8 +480,8 @@ impl Renderer {
             self.queue
                 .write_buffer(&self.composite_uniforms, 0, bytemuck::bytes_of(&composite));
             let (march, resolve) = match checked.depth_kind {
-                DepthKind::Depth => (&self.march_depth, &self.temporal_depth),
-                DepthKind::R32Float => (&self.march_r32, &self.temporal_r32),
+                DepthKind::Depth => (&mut self.march_depth, &mut self.temporal_depth),
+                DepthKind::R32Float => (&mut self.march_r32, &mut self.temporal_r32),
             };
             let scene_depth = targets.depth.unwrap_or(&self.no_depth);
             let fresh = &sized.fresh;
@@ -578,6 +593,8 @@ impl Renderer {
         } else {
             Vec::new()
         };
+        // Cached bind groups hold the old textures' views: drop them with the textures.
+        self.clear_bind_groups();
         self.sized = Some(SizedTextures {
             key,
             grid,
@@ -642,6 +659,35 @@ impl Renderer {
     /// Number of composite pipelines built so far (one per output format and mode).
     pub fn cached_pipeline_count(&self) -> usize {
         self.composite.len()
+    }
+
+    /// Bind groups the per-frame passes have made so far. They are made when the bound
+    /// textures change (first frame, resize, settings or weather change, other host views),
+    /// never per frame: a frame loop that keeps its views keeps this number still.
+    pub fn bind_groups_created(&self) -> u64 {
+        [
+            &self.march_depth.binds,
+            &self.march_r32.binds,
+            &self.temporal_depth.binds,
+            &self.temporal_r32.binds,
+        ]
+        .iter()
+        .map(|b| b.created())
+        .sum::<u64>()
+            + self.composite.bind_groups_created()
+    }
+
+    /// Drops the cached bind groups, releasing the views (and textures) they hold.
+    fn clear_bind_groups(&mut self) {
+        for b in [
+            &mut self.march_depth.binds,
+            &mut self.march_r32.binds,
+            &mut self.temporal_depth.binds,
+            &mut self.temporal_r32.binds,
+        ] {
+            b.clear();
+        }
+        self.composite.clear_bind_groups();
     }
 
     pub(crate) fn noise_volume(&self, which: NoiseVolume) -> &wgpu::Texture {

@@ -3,6 +3,7 @@
 use std::ffi::{c_char, CString};
 use std::num::NonZeroIsize;
 use std::ptr::NonNull;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 
 use glam::{Mat4, Vec3};
@@ -29,7 +30,14 @@ struct Presenter {
     config: wgpu::SurfaceConfiguration,
 }
 
+/// Context ids: textures remember theirs, so a texture is never used with another context.
+static NEXT_CONTEXT_ID: AtomicU64 = AtomicU64::new(1);
+
 pub(crate) struct ContextInner {
+    /// Unique in the process.
+    pub(crate) id: u64,
+    /// Textures hold a `Weak` of this: once it is gone, so is their context.
+    pub(crate) alive: Arc<()>,
     pub(crate) device: wgpu::Device,
     pub(crate) queue: wgpu::Queue,
     renderer: Renderer,
@@ -271,6 +279,8 @@ impl ContextInner {
         };
         let renderer = Renderer::new(&owned.device, &owned.queue, settings)?;
         Ok(Self {
+            id: NEXT_CONTEXT_ID.fetch_add(1, Ordering::Relaxed),
+            alive: Arc::new(()),
             adapter_name: CString::new(
                 format!("{} ({:?})", owned.info.name, owned.info.backend).replace('\0', " "),
             )
@@ -321,6 +331,16 @@ impl ContextInner {
         let depth = unsafe { targets.scene_depth.as_ref() };
         // SAFETY: as above.
         let output = unsafe { targets.output.as_ref() };
+        let named = [
+            ("targets.scene_color", Some(scene)),
+            ("targets.scene_depth", depth),
+            ("targets.output", output),
+        ];
+        for (name, tex) in named {
+            if let Some(tex) = tex {
+                tex.check_owner(self.id, name)?;
+            }
+        }
         self.renderer.prepare(&inputs)?;
         let mut encoder = self.device.create_command_encoder(&Default::default());
         let depth_view = depth.map(|d| &d.view);

@@ -1,5 +1,6 @@
 //! Forwards Nimbus's and wgpu's log messages to a C callback: a cdylib has no logger otherwise.
 
+use std::cell::Cell;
 use std::ffi::{c_char, c_void, CString};
 use std::sync::Mutex;
 
@@ -10,12 +11,21 @@ use super::{boundary, FfiError, NIMBUS_OK};
 pub type NimbusLogCallback =
     Option<unsafe extern "C" fn(level: i32, message: *const c_char, user_data: *mut c_void)>;
 
+#[derive(Clone, Copy)]
 struct Sink {
     callback: NimbusLogCallback,
     user_data: usize,
 }
 
+/// The registered callback. Held only to copy it out or replace it: never while the callback
+/// runs, so a callback may call back into Nimbus (even `nimbus_set_log_callback`).
 static SINK: Mutex<Option<Sink>> = Mutex::new(None);
+
+thread_local! {
+    /// Set while this thread runs the host's callback: messages logged from inside it (a
+    /// callback that calls into Nimbus) are dropped instead of recursing.
+    static IN_CALLBACK: Cell<bool> = const { Cell::new(false) };
+}
 
 struct Forwarder;
 
@@ -28,17 +38,27 @@ impl log::Log for Forwarder {
         if !self.enabled(record.metadata()) {
             return;
         }
-        let Ok(sink) = SINK.lock() else { return };
-        if let Some(Sink {
+        if IN_CALLBACK.with(Cell::get) {
+            return;
+        }
+        // Copy the sink out and release the lock before calling the host.
+        let sink = match SINK.lock() {
+            Ok(guard) => *guard,
+            Err(_) => return,
+        };
+        let Some(Sink {
             callback: Some(cb),
             user_data,
-        }) = &*sink
-        {
-            let text = format!("{}: {}", record.target(), record.args()).replace('\0', " ");
-            if let Ok(c) = CString::new(text) {
-                // SAFETY: the host registered this callback for exactly these arguments.
-                unsafe { cb(record.level() as i32, c.as_ptr(), *user_data as *mut c_void) };
-            }
+        }) = sink
+        else {
+            return;
+        };
+        let text = format!("{}: {}", record.target(), record.args()).replace('\0', " ");
+        if let Ok(c) = CString::new(text) {
+            IN_CALLBACK.with(|f| f.set(true));
+            // SAFETY: the host registered this callback for exactly these arguments.
+            unsafe { cb(record.level() as i32, c.as_ptr(), user_data as *mut c_void) };
+            IN_CALLBACK.with(|f| f.set(false));
         }
     }
 

@@ -13,9 +13,10 @@ mod log;
 mod texture;
 mod types;
 
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::ffi::{c_char, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::Once;
 
 pub use context::*;
 pub use log::*;
@@ -138,14 +139,46 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
     }
 }
 
+thread_local! {
+    /// How deep this thread is inside `boundary` (entry points may nest through callbacks).
+    static BOUNDARY_DEPTH: Cell<u32> = const { Cell::new(0) };
+}
+
+static PANIC_HOOK: Once = Once::new();
+
+/// Panics caught at the boundary are reported through the result code, the last error and the
+/// log callback; Rust's default hook would also print them (with a backtrace under
+/// `RUST_BACKTRACE`) to the host's stderr. This hook sends panics raised inside an entry point
+/// to the log instead and leaves every other panic of the process to the previous hook.
+fn install_panic_hook() {
+    PANIC_HOOK.call_once(|| {
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if BOUNDARY_DEPTH.with(Cell::get) > 0 {
+                ::log::error!("panic inside Nimbus: {info}");
+            } else {
+                previous(info);
+            }
+        }));
+    });
+}
+
 /// Runs `f` inside the panic boundary. Errors and panics become result codes; their messages
-/// go to the thread's last error (and `on_error`, which contexts use to keep their own).
+/// go to the thread's last error (and `on_error`, which contexts use to keep their own). A
+/// success empties the thread's last error.
 pub(crate) fn boundary(
     f: impl FnOnce() -> FfiResult<i32>,
     on_error: impl FnOnce(&str, bool),
 ) -> i32 {
-    match catch_unwind(AssertUnwindSafe(f)) {
-        Ok(Ok(code)) => code,
+    install_panic_hook();
+    BOUNDARY_DEPTH.with(|d| d.set(d.get() + 1));
+    let result = catch_unwind(AssertUnwindSafe(f));
+    BOUNDARY_DEPTH.with(|d| d.set(d.get().saturating_sub(1)));
+    match result {
+        Ok(Ok(code)) => {
+            set_thread_error("");
+            code
+        }
         Ok(Err(e)) => {
             set_thread_error(&e.message);
             on_error(&e.message, false);

@@ -2,6 +2,7 @@
 //! API of their own. Each holds its own reference to the device: it may outlive its context.
 
 use std::ffi::c_void;
+use std::sync::{Arc, Weak};
 
 use super::context::{with_ctx, NimbusContext};
 use super::{boundary, check_chain, FfiError, FfiResult, NimbusTextureDesc, NIMBUS_OK};
@@ -19,6 +20,10 @@ pub struct NimbusTexture {
     device: wgpu::Device,
     queue: wgpu::Queue,
     bytes_per_pixel: u32,
+    /// The context that made it: only that one may use it.
+    context_id: u64,
+    /// Alive while that context is.
+    context: Weak<()>,
 }
 
 fn format_of(format: u32) -> FfiResult<(wgpu::TextureFormat, u32)> {
@@ -44,6 +49,7 @@ unsafe fn checked<'a>(
 ) -> FfiResult<&'a NimbusTexture> {
     // SAFETY: checked for NULL; the caller guarantees validity.
     let tex = unsafe { tex.as_ref() }.ok_or_else(|| FfiError::null("tex"))?;
+    tex.check_alive()?;
     if data_is_null {
         return Err(FfiError::null("data"));
     }
@@ -52,6 +58,30 @@ unsafe fn checked<'a>(
 }
 
 impl NimbusTexture {
+    /// Refuses a texture whose context is gone: it may then only be destroyed.
+    fn check_alive(&self) -> FfiResult {
+        if self.context.strong_count() == 0 {
+            return Err(FfiError::new(
+                NIMBUS_ERROR_INVALID_TARGET,
+                "the texture's context was destroyed: the texture can only be destroyed now",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Refuses a texture made by another context than `context_id` (or one whose context is
+    /// gone); `name` says which argument it was.
+    pub(crate) fn check_owner(&self, context_id: u64, name: &str) -> FfiResult {
+        self.check_alive()?;
+        if self.context_id != context_id {
+            return Err(FfiError::new(
+                NIMBUS_ERROR_INVALID_TARGET,
+                format!("{name} was created by another context: a texture works only with the context that created it"),
+            ));
+        }
+        Ok(())
+    }
+
     fn byte_size(&self) -> usize {
         (self.texture.width() * self.texture.height() * self.bytes_per_pixel) as usize
     }
@@ -122,6 +152,8 @@ pub unsafe extern "C" fn nimbus_texture_create(
                 device,
                 queue: inner.queue.clone(),
                 bytes_per_pixel,
+                context_id: inner.id,
+                context: Arc::downgrade(&inner.alive),
             };
             *out = Box::into_raw(Box::new(tex));
             Ok(NIMBUS_OK)
@@ -204,6 +236,7 @@ pub unsafe extern "C" fn nimbus_texture_byte_size(
         || {
             // SAFETY: checked for NULL; the caller guarantees validity.
             let tex = unsafe { tex.as_ref() }.ok_or_else(|| FfiError::null("tex"))?;
+            tex.check_alive()?;
             if out.is_null() {
                 return Err(FfiError::null("out"));
             }

@@ -8,6 +8,7 @@ use std::collections::HashMap;
 use bytemuck::{Pod, Zeroable};
 use glam::Mat4;
 
+use super::bind_cache::BindCache;
 use super::shaders::{pass_source, DepthKind};
 
 /// Layout must match `CompositeUniforms` in shaders/composite.wgsl.
@@ -52,9 +53,15 @@ pub(crate) struct CompositeInputs<'a> {
     pub timer: Option<&'a super::timing::GpuTimer>,
 }
 
+/// A composite pipeline and the bind groups made for it.
+struct Composite {
+    pipeline: wgpu::RenderPipeline,
+    binds: BindCache,
+}
+
 #[derive(Default)]
 pub(crate) struct CompositeCache {
-    pipelines: HashMap<(wgpu::TextureFormat, bool, DepthKind), wgpu::RenderPipeline>,
+    pipelines: HashMap<(wgpu::TextureFormat, bool, DepthKind), Composite>,
 }
 
 fn build(
@@ -124,30 +131,38 @@ impl CompositeCache {
         format: wgpu::TextureFormat,
     ) {
         let in_place = scene.is_none();
-        let pipeline = self
+        let composite = self
             .pipelines
             .entry((format, in_place, inputs.depth_kind))
-            .or_insert_with(|| build(device, format, in_place, inputs.depth_kind));
+            .or_insert_with(|| Composite {
+                pipeline: build(device, format, in_place, inputs.depth_kind),
+                binds: BindCache::default(),
+            });
         let tex = |binding, view| wgpu::BindGroupEntry {
             binding,
             resource: wgpu::BindingResource::TextureView(view),
         };
-        let mut entries = vec![
-            tex(0, inputs.clouds),
-            tex(2, inputs.cloud_depth),
-            wgpu::BindGroupEntry {
-                binding: 3,
-                resource: inputs.uniforms.as_entire_binding(),
-            },
-            tex(4, inputs.scene_depth),
-        ];
-        if let Some(scene) = scene {
-            entries.push(tex(1, scene));
-        }
-        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("nimbus composite"),
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &entries,
+        let mut views = vec![inputs.clouds, inputs.cloud_depth, inputs.scene_depth];
+        views.extend(scene);
+        let pipeline = &composite.pipeline;
+        let bind = composite.binds.get(&views, || {
+            let mut entries = vec![
+                tex(0, inputs.clouds),
+                tex(2, inputs.cloud_depth),
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: inputs.uniforms.as_entire_binding(),
+                },
+                tex(4, inputs.scene_depth),
+            ];
+            if let Some(scene) = scene {
+                entries.push(tex(1, scene));
+            }
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("nimbus composite"),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &entries,
+            })
         });
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("nimbus composite"),
@@ -180,5 +195,17 @@ impl CompositeCache {
     /// How many pipelines have been built (one per output format, mode and depth kind used).
     pub(crate) fn len(&self) -> usize {
         self.pipelines.len()
+    }
+
+    /// Bind groups made so far, over all pipelines.
+    pub(crate) fn bind_groups_created(&self) -> u64 {
+        self.pipelines.values().map(|c| c.binds.created()).sum()
+    }
+
+    /// Drops every cached bind group (the pipelines stay).
+    pub(crate) fn clear_bind_groups(&mut self) {
+        for c in self.pipelines.values_mut() {
+            c.binds.clear();
+        }
     }
 }

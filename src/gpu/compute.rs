@@ -113,19 +113,32 @@ pub(crate) fn storage_entry(
     }
 }
 
-/// A compute-stage uniform-buffer layout entry for a `T`.
-pub(crate) fn uniform_entry<T>(binding: u32) -> wgpu::BindGroupLayoutEntry {
+/// A compute-stage layout entry for a `T` of per-frame parameters, bound as a read-only
+/// storage buffer rather than a uniform buffer: see [`FRAME_PARAMS_USAGE`].
+pub(crate) fn params_entry<T>(binding: u32) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
         ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Uniform,
+            ty: wgpu::BufferBindingType::Storage { read_only: true },
             has_dynamic_offset: false,
             min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<T>() as u64),
         },
         count: None,
     }
 }
+
+/// Usage of the buffers holding per-frame parameters (march, temporal, composite).
+///
+/// They are read-only storage buffers (`var<storage, read>` in WGSL), not uniform buffers,
+/// because Mesa's lavapipe (22.x) "inlines" uniform-buffer values that steer control flow:
+/// each distinct set of values compiles a new shader variant, kept until the pipeline is
+/// destroyed. With a camera and clock that change every frame, that is a shader compile
+/// (seconds on the CPU) and megabytes of memory per frame, for ever. Storage buffers are never
+/// inlined; on hardware drivers the two read alike for a few hundred bytes read by every
+/// invocation.
+pub(crate) const FRAME_PARAMS_USAGE: wgpu::BufferUsages =
+    wgpu::BufferUsages::STORAGE.union(wgpu::BufferUsages::COPY_DST);
 
 /// A per-frame compute pass with an explicit layout (so one pipeline serves every frame's bind
 /// group): the layout from `entries`, the module from `pass` with its depth-binding variant.

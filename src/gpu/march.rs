@@ -4,7 +4,8 @@
 use bytemuck::{Pod, Zeroable};
 use glam::{DVec2, Mat4, Vec3};
 
-use super::compute::{frame_pipeline, storage_entry, texture_entry, timed_dispatch, uniform_entry};
+use super::bind_cache::BindCache;
+use super::compute::{frame_pipeline, params_entry, storage_entry, texture_entry, timed_dispatch};
 use super::noise::NoiseTextures;
 use super::shaders::DepthKind;
 use crate::frame::{CameraDerived, FrameInputs};
@@ -232,6 +233,8 @@ impl MarchUniforms {
 pub(crate) struct MarchPipeline {
     pub layout: wgpu::BindGroupLayout,
     pub pipeline: wgpu::ComputePipeline,
+    /// Bind groups by the views they bind; `uniforms` is the renderer's one buffer.
+    pub binds: BindCache,
 }
 
 impl MarchPipeline {
@@ -250,7 +253,7 @@ impl MarchPipeline {
             kind,
             "march",
             &[
-                uniform_entry::<MarchUniforms>(0),
+                params_entry::<MarchUniforms>(0),
                 texture_entry(1, filterable, D::D3),
                 texture_entry(2, filterable, D::D3),
                 texture_entry(3, filterable, D::D2),
@@ -267,13 +270,17 @@ impl MarchPipeline {
                 texture_entry(9, filterable, D::D2),
             ],
         );
-        Self { layout, pipeline }
+        Self {
+            layout,
+            pipeline,
+            binds: BindCache::default(),
+        }
     }
 
     /// Records the march dispatch over the sparse grid of `size` invocations.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn record(
-        &self,
+        &mut self,
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         uniforms: &wgpu::Buffer,
@@ -289,27 +296,40 @@ impl MarchPipeline {
             binding: b,
             resource: wgpu::BindingResource::TextureView(v),
         };
-        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("nimbus march"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: uniforms.as_entire_binding(),
-                },
-                tex(1, &noise.base_view),
-                tex(2, &noise.detail_view),
-                tex(3, weather.0),
-                tex(4, &noise.blue_noise_view),
-                wgpu::BindGroupEntry {
-                    binding: 5,
-                    resource: wgpu::BindingResource::Sampler(&noise.sampler),
-                },
-                tex(6, scene_depth),
-                tex(7, march_out),
-                tex(8, depth_out),
-                tex(9, weather.1),
-            ],
+        let views = [
+            &noise.base_view,
+            &noise.detail_view,
+            weather.0,
+            &noise.blue_noise_view,
+            scene_depth,
+            march_out,
+            depth_out,
+            weather.1,
+        ];
+        let layout = &self.layout;
+        let bind = self.binds.get(&views, || {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("nimbus march"),
+                layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: uniforms.as_entire_binding(),
+                    },
+                    tex(1, &noise.base_view),
+                    tex(2, &noise.detail_view),
+                    tex(3, weather.0),
+                    tex(4, &noise.blue_noise_view),
+                    wgpu::BindGroupEntry {
+                        binding: 5,
+                        resource: wgpu::BindingResource::Sampler(&noise.sampler),
+                    },
+                    tex(6, scene_depth),
+                    tex(7, march_out),
+                    tex(8, depth_out),
+                    tex(9, weather.1),
+                ],
+            })
         });
         timed_dispatch(
             encoder,

@@ -1,10 +1,11 @@
 //! The temporal resolve pass: rebuilds the full trace grid from this frame's sparse march and
 //! last frame's resolved grid (shaders/temporal.wgsl), plus the ping-pong history it owns.
 
+use super::bind_cache::BindCache;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
-use super::compute::{frame_pipeline, storage_entry, texture_entry, timed_dispatch, uniform_entry};
+use super::compute::{frame_pipeline, params_entry, storage_entry, texture_entry, timed_dispatch};
 use super::shaders::DepthKind;
 
 /// Layout must match `TemporalUniforms` in shaders/temporal.wgsl.
@@ -110,6 +111,8 @@ impl CloudImage {
 pub(crate) struct TemporalPipeline {
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
+    /// Bind groups by the views they bind (the history ping-pong gives two per target set).
+    pub binds: BindCache,
 }
 
 impl TemporalPipeline {
@@ -126,7 +129,7 @@ impl TemporalPipeline {
             kind,
             "resolve",
             &[
-                uniform_entry::<TemporalUniforms>(0),
+                params_entry::<TemporalUniforms>(0),
                 texture(1, unfiltered),
                 texture(2, unfiltered),
                 texture(3, unfiltered),
@@ -142,13 +145,17 @@ impl TemporalPipeline {
                 storage_entry(7, wgpu::TextureFormat::Rgba32Float),
             ],
         );
-        Self { layout, pipeline }
+        Self {
+            layout,
+            pipeline,
+            binds: BindCache::default(),
+        }
     }
 
     /// Records the resolve of `fresh` and `history` into `out` over a `grid`-sized dispatch.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn record(
-        &self,
+        &mut self,
         device: &wgpu::Device,
         encoder: &mut wgpu::CommandEncoder,
         uniforms: &wgpu::Buffer,
@@ -163,22 +170,34 @@ impl TemporalPipeline {
             binding,
             resource: wgpu::BindingResource::TextureView(view),
         };
-        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("nimbus temporal"),
-            layout: &self.layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: uniforms.as_entire_binding(),
-                },
-                tex(1, &fresh.clouds.view),
-                tex(2, &fresh.depth.view),
-                tex(3, &history.clouds.view),
-                tex(4, &history.depth.view),
-                tex(5, scene_depth),
-                tex(6, &out.clouds.view),
-                tex(7, &out.depth.view),
-            ],
+        let views = [
+            &fresh.clouds.view,
+            &fresh.depth.view,
+            &history.clouds.view,
+            &history.depth.view,
+            scene_depth,
+            &out.clouds.view,
+            &out.depth.view,
+        ];
+        let layout = &self.layout;
+        let bind = self.binds.get(&views, || {
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("nimbus temporal"),
+                layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: uniforms.as_entire_binding(),
+                    },
+                    tex(1, &fresh.clouds.view),
+                    tex(2, &fresh.depth.view),
+                    tex(3, &history.clouds.view),
+                    tex(4, &history.depth.view),
+                    tex(5, scene_depth),
+                    tex(6, &out.clouds.view),
+                    tex(7, &out.depth.view),
+                ],
+            })
         });
         timed_dispatch(
             encoder,

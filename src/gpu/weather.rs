@@ -38,20 +38,48 @@ pub(crate) struct WeatherMaps {
 impl WeatherMaps {
     /// Creates the maps with `weather` as both "from" and "to". Submits its own work.
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, size: u32, weather: &Weather) -> Self {
+        let mut maps = Self::with_pipelines(
+            device,
+            size,
+            compute_pipeline(device, "weather_bake", "bake_weather"),
+            compute_pipeline(device, "weather_blend", "blend_maps"),
+        );
+        maps.reset(device, queue, weather);
+        maps
+    }
+
+    /// New maps of `size` holding `weather` as both "from" and "to", reusing this set's
+    /// pipelines; `self` is untouched, so a failure leaves it in use. Submits its own work.
+    pub fn rebuilt(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        size: u32,
+        weather: &Weather,
+    ) -> Self {
+        let mut maps = Self::with_pipelines(device, size, self.bake.clone(), self.blend.clone());
+        maps.reset(device, queue, weather);
+        maps
+    }
+
+    fn with_pipelines(
+        device: &wgpu::Device,
+        size: u32,
+        bake: wgpu::ComputePipeline,
+        blend: wgpu::ComputePipeline,
+    ) -> Self {
         let textures =
             [0, 1, 2].map(|i| map_texture(device, &format!("nimbus weather map {i}"), size));
         let views = [0, 1, 2].map(|i| textures[i].create_view(&Default::default()));
-        let mut maps = Self {
+        Self {
             textures,
             views,
             from: 0,
             to: 1,
-            bake: compute_pipeline(device, "weather_bake", "bake_weather"),
-            blend: compute_pipeline(device, "weather_blend", "blend_maps"),
+            bake,
+            blend,
             size,
-        };
-        maps.reset(device, queue, weather);
-        maps
+        }
     }
 
     fn groups(&self) -> [u32; 3] {
@@ -90,7 +118,7 @@ impl WeatherMaps {
     }
 
     /// Both maps become `weather`'s (an instant change).
-    pub fn reset(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, weather: &Weather) {
+    fn reset(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, weather: &Weather) {
         let mut encoder = device.create_command_encoder(&Default::default());
         self.generate(device, &mut encoder, self.from, weather);
         self.generate(device, &mut encoder, self.to, weather);
