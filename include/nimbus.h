@@ -9,33 +9,52 @@
  *   NimbusFrame.sun_direction points from the scene toward the sun.
  *
  * Results
- *   Every fallible call returns int32_t: NIMBUS_OK (0) on success, a negative NIMBUS_ERROR_*
- *   on failure, a positive NIMBUS_STATUS_* for a non-error status. Out-parameters are written
- *   only on success. nimbus_context_last_error() gives a readable message. Bad input never
- *   crashes: NULL pointers, unknown enum values and flags, unknown chained structs, NaN or
- *   non-invertible matrices and size or format mismatches all return an error code, and the
- *   context stays usable. A panic inside Nimbus returns NIMBUS_ERROR_PANIC and poisons the
- *   context: every later call on it returns NIMBUS_ERROR_POISONED; destroy it.
+ *   Every fallible call returns a NimbusResult (an int32_t): NIMBUS_OK (0) on success, a
+ *   negative NIMBUS_ERROR_* on failure, a positive NIMBUS_STATUS_* for a non-error status.
+ *   Values are stable; nimbus_result_name() and nimbus_result_message() describe any code.
+ *   Out-parameters are written only on success. Bad input never crashes: NULL pointers,
+ *   unknown enum values and flags, unknown chained structs, NaN or non-invertible matrices and
+ *   size or format mismatches all return an error code, and the context stays usable. A panic
+ *   inside Nimbus returns NIMBUS_ERROR_PANIC and poisons the context: every later call on it
+ *   returns NIMBUS_ERROR_POISONED; destroy it. Panics are reported through the log callback,
+ *   never printed to stderr.
+ *
+ * Error messages
+ *   nimbus_context_last_error(ctx) holds the message of the last call on ctx that failed, and
+ *   is empty after a call on ctx that succeeded. nimbus_context_last_error(NULL) holds the
+ *   message of the last failed call on this thread, whatever its handle, and is empty after
+ *   any call that succeeded: it is the place to look after nimbus_context_create and after the
+ *   nimbus_texture_* functions, which take no context.
  *
  * Ownership
  *   Handles (NimbusContext, NimbusTexture) are created and destroyed only by this library;
  *   passing NULL to a _destroy function is a no-op. Strings returned by the library are owned
  *   by it and valid as documented per function. Structs passed in are read during the call
- *   only.
+ *   only. A texture belongs to the context that created it: passing it to another context
+ *   returns NIMBUS_ERROR_INVALID_TARGET. A texture may outlive its context, but then only
+ *   nimbus_texture_destroy works on it; every other call returns NIMBUS_ERROR_INVALID_TARGET.
  *
  * Extension chains
  *   Root structs have a `next` pointer to chained structs that start with NimbusChainedStruct
- *   {s_type, next}. Released structs never change layout; new knobs arrive as new chained
- *   structs. A zeroed struct means "defaults" wherever a default exists.
+ *   {s_type, next}. Released structs never change layout, not even in their padding; new
+ *   knobs arrive as new chained structs. A zeroed struct means "defaults" wherever a default
+ *   exists. Each extension may appear once in a chain.
  *
  * Threading
  *   One context (and its textures) is used from one thread at a time. Different contexts may
- *   be used from different threads. The log callback may be called from any thread that calls
- *   into Nimbus.
+ *   be used from different threads at once. The log callback may be called from any thread
+ *   that calls into Nimbus, never with a Nimbus lock held: it may call Nimbus functions
+ *   (messages those calls log are dropped rather than delivered re-entrantly).
  *
  * Versioning
- *   Pass NIMBUS_ABI_VERSION in NimbusContextDesc.abi_version; a header of another major
- *   version is refused with NIMBUS_ERROR_ABI_VERSION.
+ *   Pass NIMBUS_ABI_VERSION in NimbusContextDesc.abi_version. A library accepts the same major
+ *   version with a minor from its NIMBUS_ABI_MIN_MINOR up to its own NIMBUS_VERSION_MINOR
+ *   (older headers keep working); a newer minor, another major, or 0 (a forgotten field) is
+ *   refused with NIMBUS_ERROR_ABI_VERSION.
+ *
+ * Linking
+ *   Shared: -lnimbus. Static: libnimbus.a also needs -lm -ldl -lpthread (pkg-config --static
+ *   --libs nimbus, or the CMake target nimbus::nimbus, adds them).
  */
 
 
@@ -47,407 +66,769 @@
 #include <stddef.h>
 #include <stdint.h>
 
-// Major version of the library; a context made with a header of another major version fails.
+/*
+ Major version of the library; a context made with a header of another major version fails.
+ */
 #define NIMBUS_VERSION_MAJOR 0
 
-// Minor version.
-#define NIMBUS_VERSION_MINOR 1
+/*
+ Minor version.
+ */
+#define NIMBUS_VERSION_MINOR 2
 
-// Patch version.
+/*
+ Patch version.
+ */
 #define NIMBUS_VERSION_PATCH 0
 
-// The ABI version this header describes: (major << 16) | minor. Pass it in
-// `NimbusContextDesc::abi_version`.
+/*
+ The oldest minor version of this major whose headers this library still serves.
+ */
+#define NIMBUS_ABI_MIN_MINOR 1
+
+/*
+ The ABI version this header describes: (major << 16) | minor. Pass it in
+ `NimbusContextDesc.abi_version`. A library accepts the same major with a minor from its
+ NIMBUS_ABI_MIN_MINOR up to its own NIMBUS_VERSION_MINOR: older headers keep working, a
+ newer header (which may use structs this library does not know) is refused, and so is 0.
+ */
 #define NIMBUS_ABI_VERSION ((NIMBUS_VERSION_MAJOR << 16) | NIMBUS_VERSION_MINOR)
 
-// Success.
-#define NIMBUS_OK 0
-
-// Positive status: the frame was not presented (window minimised, surface outdated or lost
-// and reconfigured); render again next frame. Not an error.
-#define NIMBUS_STATUS_FRAME_SKIPPED 1
-
-// A required pointer argument was NULL.
-#define NIMBUS_ERROR_NULL_POINTER -1
-
-// An argument is out of range, NaN, or an unknown enum value or flag.
-#define NIMBUS_ERROR_INVALID_ARGUMENT -2
-
-// A chained struct has an unknown `s_type`.
-#define NIMBUS_ERROR_UNKNOWN_STRUCT -3
-
-// The header's ABI major version does not match the library's.
-#define NIMBUS_ERROR_ABI_VERSION -4
-
-// A setting is out of range.
-#define NIMBUS_ERROR_INVALID_SETTINGS -5
-
-// The camera, sun or time of a frame is unusable (NaN, non-invertible, mismatched flags).
-#define NIMBUS_ERROR_INVALID_FRAME -6
-
-// A texture or target has the wrong size, format or role, or a data size does not match.
-#define NIMBUS_ERROR_INVALID_TARGET -7
-
-// No GPU adapter was found (install Mesa's software Vulkan on machines without a GPU).
-#define NIMBUS_ERROR_NO_ADAPTER -8
-
-// The GPU device could not be created, or reported a validation / out-of-memory error.
-#define NIMBUS_ERROR_GPU -9
-
-// A preset file is missing or malformed (the message names the line and field).
-#define NIMBUS_ERROR_PRESET_FILE -10
-
-// A weather request is unusable (bad duration, earlier than the running transition).
-#define NIMBUS_ERROR_WEATHER -11
-
-// The window surface could not be created or configured.
-#define NIMBUS_ERROR_SURFACE -12
-
-// A panic inside Nimbus was caught; the context is now poisoned.
-#define NIMBUS_ERROR_PANIC -100
-
-// The context was poisoned by an earlier panic; only `nimbus_context_destroy` remains.
-#define NIMBUS_ERROR_POISONED -101
-
-// `s_type` of [`NimbusSettingsExt`] (chain it to `NimbusContextDesc::next`).
+/*
+ `s_type` of `NimbusSettingsExt` (chain it to `NimbusContextDesc.next`).
+ */
 #define NIMBUS_STYPE_SETTINGS 1
 
-// Window platforms for [`NimbusWindowHandle::platform`].
+/*
+ `s_type` of `NimbusQualityExt` (chain it to `NimbusContextDesc.next`). Since ABI 0.2.
+ */
+#define NIMBUS_STYPE_QUALITY 2
+
+/*
+ Window platforms for `NimbusWindowHandle.platform`.
+ */
 #define NIMBUS_PLATFORM_X11 1
 
-// Wayland: `display` is the `wl_display*`, `surface` the `wl_surface*`.
+/*
+ Wayland: `display` is the `wl_display*`, `surface` the `wl_surface*`.
+ */
 #define NIMBUS_PLATFORM_WAYLAND 2
 
-// Win32: `display` is the `HINSTANCE` (may be NULL), `window` the `HWND`.
+/*
+ Win32: `display` is the `HINSTANCE` (may be NULL), `window` the `HWND`.
+ */
 #define NIMBUS_PLATFORM_WIN32 3
 
-// AppKit: `surface` is the `NSView*`.
+/*
+ AppKit: `surface` is the `NSView*`.
+ */
 #define NIMBUS_PLATFORM_APPKIT 4
 
-// Preset ids for `nimbus_context_set_weather` and `NimbusSettingsExt::initial_preset`.
+/*
+ Preset ids for `nimbus_context_set_weather` and `NimbusSettingsExt.initial_preset`.
+ */
 #define NIMBUS_PRESET_CLEAR 1
 
-// Fair-weather cumulus (the default).
+/*
+ Fair-weather cumulus (the default).
+ */
 #define NIMBUS_PRESET_SPARSE 2
 
-// Cumulus over a broken stratocumulus deck.
+/*
+ Cumulus over a broken stratocumulus deck.
+ */
 #define NIMBUS_PRESET_CLOUDY 3
 
-// A closed low deck.
+/*
+ A closed low deck.
+ */
 #define NIMBUS_PRESET_OVERCAST 4
 
-// Towering cumulonimbus over a dark deck.
+/*
+ Towering cumulonimbus over a dark deck.
+ */
 #define NIMBUS_PRESET_STORMY 5
 
-// Weather option flag: add the cirrus-like high layer.
+/*
+ Weather option flag: add the cirrus-like high layer.
+ */
 #define NIMBUS_WEATHER_CIRRUS 1
 
-// Weather option flag: turn on the horizon gradient (big clouds far away).
+/*
+ Weather option flag: turn on the horizon gradient (big clouds far away).
+ */
 #define NIMBUS_WEATHER_HORIZON_GRADIENT 2
 
-// Jitter setting: the default (on).
+/*
+ Jitter setting: the default (on).
+ */
 #define NIMBUS_JITTER_DEFAULT 0
 
-// Jitter setting: blue-noise jitter of the ray start, against banding.
+/*
+ Jitter setting: blue-noise jitter of the ray start, against banding.
+ */
 #define NIMBUS_JITTER_ON 1
 
-// Jitter setting: no jitter (deterministic frame to frame, but banding).
+/*
+ Jitter setting: no jitter (deterministic frame to frame, but banding).
+ */
 #define NIMBUS_JITTER_OFF 2
 
-// Quality level: the default (medium).
+/*
+ Quality level: the default (medium).
+ */
 #define NIMBUS_QUALITY_DEFAULT 0
 
-// Half-resolution grid, one pixel in 16 traced per frame, short marches.
+/*
+ Half-resolution grid, one pixel in 16 traced per frame, short marches.
+ */
 #define NIMBUS_QUALITY_LOW 1
 
-// Full-resolution grid, one pixel in 16 traced per frame (the default).
+/*
+ Full-resolution grid, one pixel in 16 traced per frame (the default).
+ */
 #define NIMBUS_QUALITY_MEDIUM 2
 
-// Full-resolution grid, one pixel in 4 traced per frame, longer marches.
+/*
+ Full-resolution grid, one pixel in 4 traced per frame, longer marches.
+ */
 #define NIMBUS_QUALITY_HIGH 3
 
-// Every pixel every frame, long marches, no temporal reuse (the unoptimised march).
+/*
+ Every pixel every frame, long marches, no temporal reuse (the unoptimised march).
+ */
 #define NIMBUS_QUALITY_ULTRA 4
 
-// Depth flag: the projection is reversed-Z (near at depth 1).
+/*
+ `NimbusWeatherState.phase`: the transition starts later.
+ */
+#define NIMBUS_TRANSITION_SCHEDULED 1
+
+/*
+ `NimbusWeatherState.phase`: the transition is under way.
+ */
+#define NIMBUS_TRANSITION_RUNNING 2
+
+/*
+ `NimbusWeatherState.phase`: the transition has finished (or was instant, or the sky is
+ held after nimbus_context_cancel_weather).
+ */
+#define NIMBUS_TRANSITION_DONE 3
+
+/*
+ Largest preset (file or text) accepted, in bytes.
+ */
+#define NIMBUS_MAX_PRESET_BYTES 65536
+
+/*
+ Longest weather name `NimbusWeatherState` carries, NUL included; longer names are cut.
+ */
+#define NIMBUS_WEATHER_NAME_CAPACITY 32
+
+/*
+ Depth flag: the projection is reversed-Z (near at depth 1).
+ */
 #define NIMBUS_DEPTH_REVERSED_Z 1
 
-// Depth flag: the projection has no far plane.
+/*
+ Depth flag: the projection has no far plane.
+ */
 #define NIMBUS_DEPTH_INFINITE_FAR 2
 
-// Texture formats for [`NimbusTextureDesc::format`].
+/*
+ Depth flag (since ABI 0.2): the projection is OpenGL-style, clip z in [-w, w], and the
+ depth buffer holds OpenGL's window depth (z / w + 1) / 2. A matrix cannot tell the two
+ conventions apart (every OpenGL projection is also a valid [0, 1] projection with other near
+ and far planes), so without this flag an OpenGL matrix is read as a [0, 1] one and its
+ depth buffer misread: set it whenever the projection comes from an OpenGL-style helper
+ (glm::perspective without GLM_FORCE_DEPTH_ZERO_TO_ONE, glFrustum, ...).
+ */
+#define NIMBUS_DEPTH_GL_CLIP_Z 4
+
+/*
+ Texture formats for `NimbusTextureDesc.format`.
+ */
 #define NIMBUS_FORMAT_RGBA8_UNORM 1
 
-// 8-bit sRGB-encoded color (stored encoded, read and written as linear by Nimbus).
+/*
+ 8-bit sRGB-encoded color (stored encoded, read and written as linear by Nimbus).
+ */
 #define NIMBUS_FORMAT_RGBA8_UNORM_SRGB 2
 
-// Half-float linear HDR color.
+/*
+ Half-float linear HDR color.
+ */
 #define NIMBUS_FORMAT_RGBA16_FLOAT 3
 
-// Float linear HDR color (separate output only: not blendable in place).
+/*
+ Float linear HDR color (separate output only: not blendable in place).
+ */
 #define NIMBUS_FORMAT_RGBA32_FLOAT 4
 
-// One float per pixel: scene depth in the camera's clip-space convention.
+/*
+ One float per pixel: scene depth in the camera's clip-space convention.
+ */
 #define NIMBUS_FORMAT_R32_FLOAT 5
 
-// An opaque Nimbus context (see `nimbus_context_create`).
+/*
+ The result of every fallible call. Values are stable forever; new codes take new values in
+ their block:
+
+ - 0: success; 1 to 99: statuses that are not errors;
+ - -1 to -99: errors in the call's arguments or in what they describe;
+ - -100 to -199: errors inside Nimbus (a caught panic and what it leaves);
+ - -200 to -299: the GPU device (its loss).
+
+ Functions return it as a 32-bit integer (`NimbusResult` is a typedef of `int32_t`), so an
+ older library's codes and a newer header's compare as plain numbers.
+ */
+enum NimbusResult
+#ifdef __cplusplus
+  : int32_t
+#endif /* __cplusplus */
+ {
+  /*
+   Success.
+   */
+  NIMBUS_OK = 0,
+  /*
+   The frame was not presented (window minimised, surface outdated or lost and
+   reconfigured); render again next frame. Not an error.
+   */
+  NIMBUS_STATUS_FRAME_SKIPPED = 1,
+  /*
+   A required pointer argument was NULL.
+   */
+  NIMBUS_ERROR_NULL_POINTER = -1,
+  /*
+   An argument is out of range, NaN, or an unknown enum value or flag.
+   */
+  NIMBUS_ERROR_INVALID_ARGUMENT = -2,
+  /*
+   A chained struct has an unknown `s_type`, or appears where it does not belong.
+   */
+  NIMBUS_ERROR_UNKNOWN_STRUCT = -3,
+  /*
+   The header's ABI version cannot be served by this library (see NIMBUS_ABI_VERSION).
+   */
+  NIMBUS_ERROR_ABI_VERSION = -4,
+  /*
+   A setting is out of range, alone or in combination with another.
+   */
+  NIMBUS_ERROR_INVALID_SETTINGS = -5,
+  /*
+   The camera, sun or time of a frame is unusable (NaN, non-invertible, mismatched flags).
+   */
+  NIMBUS_ERROR_INVALID_FRAME = -6,
+  /*
+   A texture or target has the wrong size, format or role, belongs to another context, or
+   a data size does not match.
+   */
+  NIMBUS_ERROR_INVALID_TARGET = -7,
+  /*
+   No GPU adapter was found (install Mesa's software Vulkan on machines without a GPU).
+   */
+  NIMBUS_ERROR_NO_ADAPTER = -8,
+  /*
+   The GPU device could not be created, or reported a validation or out-of-memory error.
+   */
+  NIMBUS_ERROR_GPU = -9,
+  /*
+   A preset file is missing, too large or malformed (the message names the line and field).
+   */
+  NIMBUS_ERROR_PRESET_FILE = -10,
+  /*
+   A weather request is unusable (bad duration, earlier than the running transition).
+   */
+  NIMBUS_ERROR_WEATHER = -11,
+  /*
+   The window surface could not be created or configured.
+   */
+  NIMBUS_ERROR_SURFACE = -12,
+  /*
+   A panic inside Nimbus was caught; the context is now poisoned.
+   */
+  NIMBUS_ERROR_PANIC = -100,
+  /*
+   The context was poisoned by an earlier panic; only nimbus_context_destroy remains.
+   */
+  NIMBUS_ERROR_POISONED = -101,
+  /*
+   The GPU device was lost (driver reset, device removed or destroyed). The context can
+   only be destroyed; create a new one.
+   */
+  NIMBUS_ERROR_DEVICE_LOST = -200,
+};
+#ifndef __cplusplus
+typedef int32_t NimbusResult;
+#endif /* __cplusplus */
+
+/*
+ An opaque Nimbus context (see `nimbus_context_create`).
+ */
 typedef struct NimbusContext NimbusContext;
 
-// An opaque texture handle (see `nimbus_texture_create`).
+/*
+ An opaque texture handle (see `nimbus_texture_create`).
+ */
 typedef struct NimbusTexture NimbusTexture;
 
-// Temporal reprojection and accumulation of the cloud image.
-typedef struct Temporal Temporal;
-
-// Which pixels of the trace grid are traced in a frame. The order is a Bayer matrix, so
-// consecutive frames fill the block evenly.
-typedef struct TracePattern TracePattern;
-
-// Header of every chained extension struct: put it first, set `s_type`, link with `next`.
+/*
+ Header of every chained extension struct: put it first, set `s_type`, link with `next`.
+ */
 typedef struct NimbusChainedStruct {
-  // Which struct this is: a `NIMBUS_STYPE_*` value.
+  /*
+   Which struct this is: a `NIMBUS_STYPE_*` value.
+   */
   uint32_t s_type;
-  // The next struct in the chain, or NULL.
+  /*
+   The next struct in the chain, or NULL.
+   */
   const struct NimbusChainedStruct *next;
 } NimbusChainedStruct;
 
-// A native window to present to. The handles must outlive the context.
+/*
+ A native window to present to. The handles must outlive the context.
+ */
 typedef struct NimbusWindowHandle {
-  // A `NIMBUS_PLATFORM_*` value.
+  /*
+   A `NIMBUS_PLATFORM_*` value.
+   */
   uint32_t platform;
-  // X11: the Xlib `Display*`. Wayland: the `wl_display*`. Win32: the `HINSTANCE`.
+  /*
+   X11: the Xlib `Display*`. Wayland: the `wl_display*`. Win32: the `HINSTANCE`.
+   */
   void *display;
-  // X11: the `Window` (XID). Win32: the `HWND`.
+  /*
+   X11: the `Window` (XID). Win32: the `HWND`.
+   */
   uint64_t window;
-  // Wayland: the `wl_surface*`. AppKit: the `NSView*`.
+  /*
+   Wayland: the `wl_surface*`. AppKit: the `NSView*`.
+   */
   void *surface;
 } NimbusWindowHandle;
 
-// How to create a context.
+/*
+ How to create a context.
+ */
 typedef struct NimbusContextDesc {
-  // Chained extensions (e.g. [`NimbusSettingsExt`]), or NULL.
+  /*
+   Chained extensions (e.g. `NimbusSettingsExt`), or NULL.
+   */
   const struct NimbusChainedStruct *next;
-  // Must be `NIMBUS_ABI_VERSION` of the header you compiled against.
+  /*
+   Must be `NIMBUS_ABI_VERSION` of the header you compiled against.
+   */
   uint32_t abi_version;
-  // Window surface size in pixels (ignored without a window).
+  /*
+   Window surface size in pixels (ignored without a window).
+   */
   uint32_t width;
-  // Window surface height in pixels.
+  /*
+   Window surface height in pixels.
+   */
   uint32_t height;
-  // The window to present to, or NULL for a headless context.
+  /*
+   The window to present to, or NULL for a headless context.
+   */
   const struct NimbusWindowHandle *window;
 } NimbusContextDesc;
 
-// One frame's inputs. Matrices are column-major, right-handed, meters; clip depth in [0, 1].
+/*
+ One frame's inputs. Matrices are column-major, right-handed, meters; clip depth in [0, 1].
+ */
 typedef struct NimbusFrame {
-  // Chained extensions, or NULL.
+  /*
+   Chained extensions, or NULL.
+   */
   const struct NimbusChainedStruct *next;
-  // World-to-view matrix (camera looks down -Z).
+  /*
+   World-to-view matrix (camera looks down -Z).
+   */
   float view[16];
-  // View-to-clip perspective projection.
+  /*
+   View-to-clip perspective projection.
+   */
   float projection[16];
-  // `NIMBUS_DEPTH_*` flags; they must match the projection (checked).
+  /*
+   `NIMBUS_DEPTH_*` flags; they must match the projection (checked).
+   */
   uint32_t depth_flags;
-  // Direction from the scene toward the sun (normalised by Nimbus; not zero).
+  /*
+   Direction from the scene toward the sun (normalised by Nimbus; not zero).
+   */
   float sun_direction[3];
-  // Linear RGB sun tint. All zero: white.
+  /*
+   Linear RGB sun tint. All zero: white.
+   */
   float sun_color[3];
-  // Sun illuminance, lux-like linear units (0: no sun, e.g. at night).
+  /*
+   Sun illuminance, lux-like linear units (0: no sun, e.g. at night).
+   */
   float sun_illuminance;
-  // Seconds on the host's clock: drives wind and weather transitions.
+  /*
+   Seconds on the host's clock: drives wind and weather transitions.
+   */
   double time;
 } NimbusFrame;
 
-// The textures of one frame, all the same size.
+/*
+ The textures of one frame, all the same size.
+ */
 typedef struct NimbusTargets {
-  // Chained extensions, or NULL.
+  /*
+   Chained extensions, or NULL.
+   */
   const struct NimbusChainedStruct *next;
-  // The rendered scene (color format). Required.
+  /*
+   The rendered scene (color format). Required.
+   */
   const struct NimbusTexture *scene_color;
-  // Scene depth (`NIMBUS_FORMAT_R32_FLOAT`), or NULL when nothing occludes the clouds.
+  /*
+   Scene depth (`NIMBUS_FORMAT_R32_FLOAT`), or NULL when nothing occludes the clouds.
+   */
   const struct NimbusTexture *scene_depth;
-  // Where `scene * T + L` goes: another color texture, `scene_color` itself (in place), or
-  // NULL to present to the context's window.
+  /*
+   Where `scene * T + L` goes: another color texture, `scene_color` itself (in place), or
+   NULL to present to the context's window.
+   */
   const struct NimbusTexture *output;
 } NimbusTargets;
 
-// Receives one log message: `level` 1 error, 2 warning, 3 info, 4 debug, 5 trace. The message
-// is valid only during the call. May be called from any thread that uses Nimbus.
+/*
+ The weather transition as seen at one time (nimbus_context_weather_state), since ABI 0.2.
+ */
+typedef struct NimbusWeatherState {
+  /*
+   Chained extensions, or NULL.
+   */
+  const struct NimbusChainedStruct *next;
+  /*
+   Name of the weather the transition starts from, NUL-terminated (a frozen blend keeps
+   the name of its nearer end).
+   */
+  char from_name[NIMBUS_WEATHER_NAME_CAPACITY];
+  /*
+   Name of the weather it heads to, NUL-terminated.
+   */
+  char to_name[NIMBUS_WEATHER_NAME_CAPACITY];
+  /*
+   Host time the transition starts at, seconds.
+   */
+  double start;
+  /*
+   Its length in seconds (0: instant, or a held sky).
+   */
+  double duration;
+  /*
+   Blend weight in [0, 1] at the queried time.
+   */
+  float progress;
+  /*
+   A `NIMBUS_TRANSITION_*` value.
+   */
+  uint32_t phase;
+} NimbusWeatherState;
+
+/*
+ Receives one log message: `level` 1 error, 2 warning, 3 info, 4 debug, 5 trace. The message
+ is valid only during the call. May be called from any thread that uses Nimbus.
+ */
 typedef void (*NimbusLogCallback)(int32_t level, const char *message, void *user_data);
 
-// How to create a texture.
+/*
+ How to create a texture.
+ */
 typedef struct NimbusTextureDesc {
-  // Chained extensions, or NULL.
+  /*
+   Chained extensions, or NULL.
+   */
   const struct NimbusChainedStruct *next;
-  // Width in pixels, 1..=8192.
+  /*
+   Width in pixels, 1..=8192.
+   */
   uint32_t width;
-  // Height in pixels, 1..=8192.
+  /*
+   Height in pixels, 1..=8192.
+   */
   uint32_t height;
-  // A `NIMBUS_FORMAT_*` value.
+  /*
+   A `NIMBUS_FORMAT_*` value.
+   */
   uint32_t format;
 } NimbusTextureDesc;
 
-// Settings extension (`s_type = NIMBUS_STYPE_SETTINGS`). Zero in any field means its default.
+/*
+ Settings extension (`s_type = NIMBUS_STYPE_SETTINGS`). Zero in any field means its default.
+ */
 typedef struct NimbusSettingsExt {
-  // Chain header.
+  /*
+   Chain header.
+   */
   struct NimbusChainedStruct chain;
-  // Weather at start: a `NIMBUS_PRESET_*` id. 0: sparse.
+  /*
+   Weather at start: a `NIMBUS_PRESET_*` id. 0: sparse.
+   */
   uint32_t initial_preset;
-  // Seed of the noise volumes. 0: 1.
+  /*
+   Seed of the noise volumes. 0: 1.
+   */
   uint32_t noise_seed;
-  // Most march steps per ray (4..=1024). 0: 96.
+  /*
+   Most march steps per ray (4..=1024). 0: 96.
+   */
   uint32_t march_max_steps;
-  // Fewest march steps per ray (1..=max). 0: 48.
+  /*
+   Fewest march steps per ray (1..=max). 0: 48.
+   */
   uint32_t march_min_steps;
-  // A `NIMBUS_JITTER_*` value.
+  /*
+   A `NIMBUS_JITTER_*` value.
+   */
   uint32_t jitter;
-  // Rays end this far away, meters. 0: 120 000.
+  /*
+   Rays end this far away, meters. 0: 120 000.
+   */
   float max_distance;
-  // Planet radius, meters. 0: 6 360 000.
+  /*
+   Planet radius, meters. 0: 6 360 000.
+   */
   float planet_radius;
-  // A `NIMBUS_QUALITY_*` level, applied before the march fields above refine it.
-  // 0: medium.
-  uint32_t quality;
 } NimbusSettingsExt;
+
+/*
+ Quality extension (`s_type = NIMBUS_STYPE_QUALITY`), since ABI 0.2. The level is applied
+ first; the march fields of a `NimbusSettingsExt` in the same chain refine it.
+ */
+typedef struct NimbusQualityExt {
+  /*
+   Chain header.
+   */
+  struct NimbusChainedStruct chain;
+  /*
+   A `NIMBUS_QUALITY_*` level. 0: medium.
+   */
+  uint32_t quality;
+} NimbusQualityExt;
 
 
 
 #ifdef __cplusplus
 extern "C" {
-#endif // __cplusplus
+#endif /* __cplusplus */
 
-// The library's version as (major << 16) | (minor << 8) | patch.
+/*
+ The library's version as (major << 16) | (minor << 8) | patch.
+ */
 uint32_t nimbus_version(void);
 
-// The library's version as text, e.g. "0.1.0". Static storage; never free it.
+/*
+ The library's version as text, e.g. "0.1.0". Static storage; never free it.
+ */
 const char *nimbus_version_string(void);
 
-// Creates a context: its own GPU device (any adapter; Mesa's software Vulkan works), a
-// renderer, and, when `desc->window` is set, a surface presenting to that window. Blocks while
-// the noise volumes are baked. On success writes the handle to `*out`; on failure `*out` is
-// untouched and `nimbus_context_last_error(NULL)` says why.
-//
-// # Safety
-// `desc` and `out` must be NULL or valid; the chain and window handles must be valid.
-int32_t nimbus_context_create(const struct NimbusContextDesc *desc, struct NimbusContext **out);
+/*
+ Creates a context: its own GPU device (any adapter; Mesa's software Vulkan works), a
+ renderer, and, when `desc->window` is set, a surface presenting to that window. Blocks while
+ the noise volumes are baked. On success writes the handle to `*out`; on failure `*out` is
+ untouched and `nimbus_context_last_error(NULL)` says why.
 
-// Destroys a context (waiting for its GPU work). NULL is a no-op.
-//
-// # Safety
-// `ctx` must be NULL or a context from `nimbus_context_create`, not yet destroyed.
+ Safety: `desc` and `out` must be NULL or valid; the chain and window handles must be valid.
+ */
+NimbusResult nimbus_context_create(const struct NimbusContextDesc *desc,
+                                   struct NimbusContext **out);
+
+/*
+ Destroys a context (waiting for its GPU work). NULL is a no-op.
+
+ Safety: `ctx` must be NULL or a context from `nimbus_context_create`, not yet destroyed.
+ */
 void nimbus_context_destroy(struct NimbusContext *ctx);
 
-// The message of the last failed call on `ctx`, or with NULL the last failed call on this
-// thread (e.g. a failed `nimbus_context_create`). Empty after a success. Valid until the next
-// call with the same context (or on this thread); never free it.
-//
-// # Safety
-// `ctx` must be NULL or a live context.
+/*
+ The message of the last failed call on `ctx`, or with NULL the last failed call on this
+ thread (e.g. a failed `nimbus_context_create`). Empty after a success. Valid until the next
+ call with the same context (or on this thread); never free it.
+
+ Safety: `ctx` must be NULL or a live context.
+ */
 const char *nimbus_context_last_error(const struct NimbusContext *ctx);
 
-// The GPU adapter in use, e.g. "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)". NULL for a NULL
-// context. Valid while the context lives.
-//
-// # Safety
-// `ctx` must be NULL or a live context.
+/*
+ The GPU adapter in use, e.g. "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)". NULL for a NULL
+ context. Valid while the context lives.
+
+ Safety: `ctx` must be NULL or a live context.
+ */
 const char *nimbus_context_adapter_name(const struct NimbusContext *ctx);
 
-// Renders one frame: the clouds over `targets->scene_color` (clipped by `scene_depth`),
-// composited into `targets->output` or presented to the window when `output` is NULL. Returns
-// `NIMBUS_STATUS_FRAME_SKIPPED` when the window could not take a frame (render again).
-//
-// # Safety
-// `ctx`, `frame`, `targets` and the textures they point to must be NULL or valid.
-int32_t nimbus_context_render(struct NimbusContext *ctx,
-                              const struct NimbusFrame *frame,
-                              const struct NimbusTargets *targets);
+/*
+ Renders one frame: the clouds over `targets->scene_color` (clipped by `scene_depth`),
+ composited into `targets->output` or presented to the window when `output` is NULL. Returns
+ `NIMBUS_STATUS_FRAME_SKIPPED` when the window could not take a frame (render again).
 
-// Resizes the window surface (windowed contexts; for headless ones the size only is checked).
-// On failure the previous size stays in use.
-//
-// # Safety
-// `ctx` must be NULL or a live context.
-int32_t nimbus_context_resize(struct NimbusContext *ctx, uint32_t width, uint32_t height);
+ Safety: `ctx`, `frame`, `targets` and the textures they point to must be NULL or valid.
+ */
+NimbusResult nimbus_context_render(struct NimbusContext *ctx,
+                                   const struct NimbusFrame *frame,
+                                   const struct NimbusTargets *targets);
 
-// Starts a transition to a built-in preset (`NIMBUS_PRESET_*`, with `NIMBUS_WEATHER_*`
-// option flags) at host time `start` seconds, lasting `duration` seconds (0 = at once). A
-// transition already running is frozen where it is and continued from, so the sky never
-// jumps. Requests must come in time order.
-//
-// # Safety
-// `ctx` must be NULL or a live context.
-int32_t nimbus_context_set_weather(struct NimbusContext *ctx,
-                                   uint32_t preset_id,
-                                   uint32_t options,
-                                   double start,
-                                   double duration);
+/*
+ Resizes the window surface (windowed contexts; for headless ones the size only is checked).
+ On failure the previous size stays in use.
 
-// Like `nimbus_context_set_weather`, with the weather read from a TOML preset file. A missing
-// or malformed file returns `NIMBUS_ERROR_PRESET_FILE`; the message names the line and field.
-//
-// # Safety
-// `ctx` must be NULL or a live context; `path` NULL or a NUL-terminated UTF-8 path.
-int32_t nimbus_context_load_weather(struct NimbusContext *ctx,
-                                    const char *path,
-                                    double start,
-                                    double duration);
+ Safety: `ctx` must be NULL or a live context.
+ */
+NimbusResult nimbus_context_resize(struct NimbusContext *ctx, uint32_t width, uint32_t height);
 
-// Drops the accumulated cloud history, so the next frame starts afresh. Call it on camera
-// cuts (a teleport, a switch to another camera); ordinary and fast motion need no call.
-//
-// # Safety
-// `ctx` must be NULL or a live context.
-int32_t nimbus_context_reset_history(struct NimbusContext *ctx);
+/*
+ Starts a transition to a built-in preset (`NIMBUS_PRESET_*`, with `NIMBUS_WEATHER_*`
+ option flags) at host time `start` seconds, lasting `duration` seconds (0 = at once). A
+ transition already running is frozen where it is and continued from, so the sky never
+ jumps. Requests must come in time order.
 
-// Deliberately panics inside the boundary: lets hosts check that a panic comes back as
-// `NIMBUS_ERROR_PANIC` and poisons the context. Never call it in production.
-//
-// # Safety
-// `ctx` must be NULL or a live context.
-int32_t nimbus_context_debug_panic(struct NimbusContext *ctx);
+ Safety: `ctx` must be NULL or a live context.
+ */
+NimbusResult nimbus_context_set_weather(struct NimbusContext *ctx,
+                                        uint32_t preset_id,
+                                        uint32_t options,
+                                        double start,
+                                        double duration);
 
-// Sets (or, with NULL, removes) the log callback for the whole library. `max_level` 0 turns
-// logging off, 1 errors only ... 5 everything. Returns `NIMBUS_ERROR_INVALID_ARGUMENT` for a
-// level outside 0..=5.
-int32_t nimbus_set_log_callback(NimbusLogCallback callback, void *user_data, int32_t max_level);
+/*
+ Like `nimbus_context_set_weather`, with the weather read from a TOML preset file. A missing
+ or malformed file returns `NIMBUS_ERROR_PRESET_FILE`; the message names the line and field.
 
-// Creates a texture on the context's device: color formats can be scene color or output,
-// `NIMBUS_FORMAT_R32_FLOAT` holds scene depth. Contents start zeroed. `*out` is written only
-// on success; free it with `nimbus_texture_destroy`.
-//
-// # Safety
-// `ctx`, `desc` and `out` must be NULL or valid pointers.
-int32_t nimbus_texture_create(struct NimbusContext *ctx,
-                              const struct NimbusTextureDesc *desc,
-                              struct NimbusTexture **out);
+ Safety: `ctx` must be NULL or a live context; `path` NULL or a NUL-terminated UTF-8 path.
+ */
+NimbusResult nimbus_context_load_weather(struct NimbusContext *ctx,
+                                         const char *path,
+                                         double start,
+                                         double duration);
 
-// Replaces the whole texture's contents with `size` bytes: rows from the top, tightly packed
-// (width × bytes per pixel each), channels in format order (floats little-endian).
-//
-// # Safety
-// `tex` must be NULL or a live texture; `data` must be NULL or point to `size` readable bytes.
-int32_t nimbus_texture_write(struct NimbusTexture *tex, const void *data, size_t size);
+/*
+ Like `nimbus_context_load_weather`, with the preset's TOML text in memory (`size` bytes,
+ UTF-8, no NUL needed): for engines that ship packed assets. The same size limit and checks
+ as for files apply; errors name the line and field.
 
-// Waits for the GPU and copies the texture into `data` (`size` bytes, layout as for
-// `nimbus_texture_write`).
-//
-// # Safety
-// `tex` must be NULL or a live texture; `data` must be NULL or point to `size` writable bytes.
-int32_t nimbus_texture_read(const struct NimbusTexture *tex, void *data, size_t size);
+ Safety: `ctx` must be NULL or a live context; `text` NULL or `size` readable bytes.
+ */
+NimbusResult nimbus_context_set_weather_toml(struct NimbusContext *ctx,
+                                             const char *text,
+                                             size_t size,
+                                             double start,
+                                             double duration);
 
-// Writes the number of bytes the texture holds (width × height × bytes per pixel) to `*out`.
-//
-// # Safety
-// `tex` must be NULL or a live texture; `out` NULL or writable.
-int32_t nimbus_texture_byte_size(const struct NimbusTexture *tex, size_t *out);
+/*
+ Writes a built-in preset (`NIMBUS_PRESET_*` with `NIMBUS_WEATHER_*` options) as TOML, the
+ template for preset files: with `buf` NULL, writes the size it needs (NUL included) to
+ `*size`; otherwise `*size` must hold `buf`'s capacity, the text is written NUL-terminated
+ and `*size` becomes its length with the NUL. A too small buffer is
+ NIMBUS_ERROR_INVALID_ARGUMENT (nothing written).
 
-// Frees a texture. NULL is a no-op. The texture must not be in use by a running call.
-//
-// # Safety
-// `tex` must be NULL or a texture from `nimbus_texture_create`, not yet destroyed.
+ Safety: `size` must be NULL or valid; `buf` NULL or `*size` writable bytes.
+ */
+NimbusResult nimbus_preset_write_toml(uint32_t preset_id,
+                                      uint32_t options,
+                                      char *buf,
+                                      size_t *size);
+
+/*
+ Writes where the weather transition stands at host time `time` to `*out`: from and to,
+ start, duration, progress and phase.
+
+ Safety: `ctx` must be NULL or a live context; `out` NULL or writable.
+ */
+NimbusResult nimbus_context_weather_state(struct NimbusContext *ctx,
+                                          double time,
+                                          struct NimbusWeatherState *out);
+
+/*
+ Stops the weather where it is at host time `now`: a running transition freezes at its
+ current blend, a scheduled one (starting after `now`) is dropped, and the sky holds until
+ the next weather request (which must not be earlier than `now`).
+
+ Safety: `ctx` must be NULL or a live context.
+ */
+NimbusResult nimbus_context_cancel_weather(struct NimbusContext *ctx, double now);
+
+/*
+ Drops the accumulated cloud history, so the next frame starts afresh. Call it on camera
+ cuts (a teleport, a switch to another camera); ordinary and fast motion need no call.
+
+ Safety: `ctx` must be NULL or a live context.
+ */
+NimbusResult nimbus_context_reset_history(struct NimbusContext *ctx);
+
+/*
+ Sets (or, with NULL, removes) the log callback for the whole library. `max_level` 0 turns
+ logging off, 1 errors only ... 5 everything. Returns `NIMBUS_ERROR_INVALID_ARGUMENT` for a
+ level outside 0..=5.
+ */
+NimbusResult nimbus_set_log_callback(NimbusLogCallback callback,
+                                     void *user_data,
+                                     int32_t max_level);
+
+/*
+ The name of a result code, e.g. "NIMBUS_ERROR_NULL_POINTER"; "NIMBUS_UNKNOWN_RESULT" for
+ a value that is no code. Static storage; never free it.
+ */
+const char *nimbus_result_name(int32_t code);
+
+/*
+ What a result code means, in one sentence (the per-call details are in
+ nimbus_context_last_error). Static storage; never free it.
+ */
+const char *nimbus_result_message(int32_t code);
+
+/*
+ Creates a texture on the context's device: color formats can be scene color or output,
+ `NIMBUS_FORMAT_R32_FLOAT` holds scene depth. Contents start zeroed. `*out` is written only
+ on success; free it with `nimbus_texture_destroy`.
+
+ Safety: `ctx`, `desc` and `out` must be NULL or valid pointers.
+ */
+NimbusResult nimbus_texture_create(struct NimbusContext *ctx,
+                                   const struct NimbusTextureDesc *desc,
+                                   struct NimbusTexture **out);
+
+/*
+ Replaces the whole texture's contents with `size` bytes: rows from the top, tightly packed
+ (width × bytes per pixel each), channels in format order (floats little-endian).
+
+ Safety: `tex` must be NULL or a live texture; `data` must be NULL or point to `size` readable bytes.
+ */
+NimbusResult nimbus_texture_write(struct NimbusTexture *tex,
+                                  const void *data,
+                                  size_t size);
+
+/*
+ Waits for the GPU and copies the texture into `data` (`size` bytes, layout as for
+ `nimbus_texture_write`).
+
+ Safety: `tex` must be NULL or a live texture; `data` must be NULL or point to `size` writable bytes.
+ */
+NimbusResult nimbus_texture_read(const struct NimbusTexture *tex,
+                                 void *data,
+                                 size_t size);
+
+/*
+ Writes the number of bytes the texture holds (width × height × bytes per pixel) to `*out`.
+
+ Safety: `tex` must be NULL or a live texture; `out` NULL or writable.
+ */
+NimbusResult nimbus_texture_byte_size(const struct NimbusTexture *tex, size_t *out);
+
+/*
+ Frees a texture. NULL is a no-op. The texture must not be in use by a running call.
+
+ Safety: `tex` must be NULL or a texture from `nimbus_texture_create`, not yet destroyed.
+ */
 void nimbus_texture_destroy(struct NimbusTexture *tex);
 
 #ifdef __cplusplus
-}  // extern "C"
-#endif  // __cplusplus
+}  /* extern "C" */
+#endif  /* __cplusplus */
 
 #endif  /* NIMBUS_H */

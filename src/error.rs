@@ -69,6 +69,10 @@ pub enum Error {
     /// wgpu reported a validation or out-of-memory error.
     #[error("GPU error: {0}")]
     Gpu(String),
+    /// The GPU device was lost (driver reset, device removed, `Device::destroy`). Everything
+    /// made on it is unusable: make a new device (or `Headless`).
+    #[error("the GPU device was lost ({0}); everything made on it is unusable")]
+    DeviceLost(String),
     /// Reading a texture back to the CPU failed.
     #[error("GPU readback failed: {0}")]
     Readback(String),

@@ -17,6 +17,13 @@ pub struct DepthConvention {
     /// The projection has no far plane (depth reaches its far value only at infinity).
     /// Default false.
     pub infinite_far: bool,
+    /// The projection is OpenGL-style: clip z in [-w, w], and the depth buffer holds window
+    /// depth (z / w + 1) / 2, as OpenGL writes it with its default depth range. Nimbus maps it
+    /// to [0, 1] clip space itself. A projection matrix cannot tell the two conventions apart
+    /// (every OpenGL matrix is also a valid [0, 1] matrix with other near and far planes), so
+    /// this flag is the host's word, not a guess. Default false: [0, 1] (Vulkan, D3D, Metal,
+    /// wgpu).
+    pub gl_clip_z: bool,
 }
 
 impl DepthConvention {
@@ -145,23 +152,42 @@ fn depth_at(projection: &Mat4, dist: f32) -> f32 {
     c.z / c.w
 }
 
+/// Clip z in [-w, w] to [0, w]: z' = (z + w) / 2. Applied to an OpenGL-style projection, the
+/// new NDC depth equals the window depth OpenGL wrote into the depth buffer.
+const GL_TO_ZERO_ONE: Mat4 = Mat4::from_cols_array(&[
+    1.0, 0.0, 0.0, 0.0, //
+    0.0, 1.0, 0.0, 0.0, //
+    0.0, 0.0, 0.5, 0.0, //
+    0.0, 0.0, 0.5, 1.0,
+]);
+
+/// Beyond this distance (m) a far plane counts as infinite: f32 depth cannot resolve it.
+const FAR_INDISTINGUISHABLE: f64 = 1e9;
+
 impl Camera {
+    /// The projection in wgpu clip space (depth in [0, 1]), whatever the host's convention.
+    fn zero_one_projection(&self) -> Mat4 {
+        if self.depth.gl_clip_z {
+            GL_TO_ZERO_ONE * self.projection
+        } else {
+            self.projection
+        }
+    }
+
     /// Checks the matrices and that `depth` matches what the projection really does.
     pub(crate) fn derive(&self) -> Result<CameraDerived> {
         matrix_finite("camera.view", &self.view)?;
         matrix_finite("camera.projection", &self.projection)?;
         let inv_view = invertible("camera.view", &self.view)?;
         invertible("camera.projection", &self.projection)?;
-        if self.projection.w_axis.w.abs() > 1e-6 || self.projection.z_axis.w.abs() < 1e-6 {
+        let projection = self.zero_one_projection();
+        if projection.w_axis.w.abs() > 1e-6 || projection.z_axis.w.abs() < 1e-6 {
             return Err(invalid_frame(
                 "camera.projection",
                 "must be a perspective projection (clip w = -view z)",
             ));
         }
-        let (near, mid) = (
-            depth_at(&self.projection, 1e-3),
-            depth_at(&self.projection, 1e3),
-        );
+        let (near, mid) = (depth_at(&projection, 1e-3), depth_at(&projection, 1e3));
         let reversed = mid < near;
         if reversed != self.depth.reversed_z {
             return Err(invalid_frame(
@@ -175,23 +201,31 @@ impl Camera {
         }
         // Where the far value lands: infinitely far only for an infinite projection. In f64 so
         // that a legitimately huge but finite far plane is not mistaken for infinity.
-        let far_dist = far_plane_distance(&self.projection, self.depth.far_value());
-        let infinite = far_dist > 1e9;
+        let far_dist = far_plane_distance(&projection, self.depth.far_value());
+        // A finite far plane past 1e9 m, or a far/near ratio so large that the z row rounds
+        // to an infinite projection's in f32, is infinite in effect: it must be declared so.
+        let infinite = far_dist > FAR_INDISTINGUISHABLE;
         if infinite != self.depth.infinite_far {
             return Err(invalid_frame(
                 "camera.depth.infinite_far",
-                format!(
-                    "is {} but the projection has {} far plane",
-                    self.depth.infinite_far,
-                    if infinite {
-                        "an infinite".to_string()
-                    } else {
-                        format!("a finite ({far_dist:.1} m)")
-                    }
-                ),
+                if infinite {
+                    format!(
+                        "is {} but the projection has no far plane in f32 (its z row is an \
+                         infinite projection's: a far/near ratio above about 1e7 rounds to \
+                         that); declare an infinite far plane",
+                        self.depth.infinite_far
+                    )
+                } else {
+                    format!(
+                        "is {} but the projection has a far plane, at about {far_dist:.0} m \
+                         as its f32 entries encode it (near/far ratios beyond about 1e5 make \
+                         f32 place the far plane only roughly)",
+                        self.depth.infinite_far
+                    )
+                },
             ));
         }
-        let view_proj = self.projection * self.view;
+        let view_proj = projection * self.view;
         let inv_view_proj = invertible("camera.view * camera.projection", &view_proj)?;
         Ok(CameraDerived {
             inv_view_proj,
@@ -206,19 +240,28 @@ impl Sun {
         if !self.direction.is_finite() || self.direction.length() < 1e-6 {
             return Err(invalid_frame(
                 "sun.direction",
-                format!("must be a finite non-zero vector, got {}", self.direction),
+                format!(
+                    "must be a finite non-zero vector, got {}",
+                    crate::validate::vec(self.direction)
+                ),
             ));
         }
         if !self.color.is_finite() || self.color.min_element() < 0.0 {
             return Err(invalid_frame(
                 "sun.color",
-                format!("must be finite and non-negative, got {}", self.color),
+                format!(
+                    "must be finite and non-negative, got {}",
+                    crate::validate::vec(self.color)
+                ),
             ));
         }
         if !self.illuminance.is_finite() || self.illuminance < 0.0 {
             return Err(invalid_frame(
                 "sun.illuminance",
-                format!("must be finite and >= 0, got {}", self.illuminance),
+                format!(
+                    "must be finite and >= 0, got {}",
+                    crate::validate::num(self.illuminance)
+                ),
             ));
         }
         Ok(self.direction.normalize())
@@ -230,7 +273,7 @@ impl FrameInputs {
         if !self.time.is_finite() {
             return Err(invalid_frame(
                 "time",
-                format!("must be finite, got {}", self.time),
+                format!("must be finite, got {}", crate::validate::num(self.time)),
             ));
         }
         Ok((self.camera.derive()?, self.sun.validate()?))
@@ -264,6 +307,12 @@ pub fn linearize_depth(depth: f32, projection: &Mat4, convention: DepthConventio
     if depth == convention.far_value() {
         return f32::INFINITY;
     }
+    let projection = Camera {
+        view: Mat4::IDENTITY,
+        projection: *projection,
+        depth: convention,
+    }
+    .zero_one_projection();
     let p = projection.inverse() * Vec4::new(0.0, 0.0, depth, 1.0);
     if p.w.abs() < 1e-20 {
         return f32::INFINITY;
@@ -283,7 +332,70 @@ mod tests {
         DepthConvention {
             reversed_z,
             infinite_far,
+            ..Default::default()
         }
+    }
+
+    #[test]
+    fn gl_clip_z_projection_reads_as_its_zero_one_twin() {
+        let fov = 1.1;
+        let gl = Mat4::perspective_rh_gl(fov, 1.5, N, F);
+        let zero_one = Mat4::perspective_rh(fov, 1.5, N, F);
+        let view = Mat4::look_at_rh(
+            Vec3::new(0.0, 2.0, 0.0),
+            Vec3::new(0.0, 3.0, -10.0),
+            Vec3::Y,
+        );
+        let flagged = Camera {
+            view,
+            projection: gl,
+            depth: DepthConvention {
+                gl_clip_z: true,
+                ..Default::default()
+            },
+        };
+        let plain = Camera {
+            view,
+            projection: zero_one,
+            depth: DepthConvention::default(),
+        };
+        let (a, b) = (flagged.derive().unwrap(), plain.derive().unwrap());
+        let scale = b
+            .inv_view_proj
+            .to_cols_array()
+            .iter()
+            .fold(0.0f32, |m, v| m.max(v.abs()));
+        assert!(a.inv_view_proj.abs_diff_eq(b.inv_view_proj, 1e-3 * scale));
+        // The window depth OpenGL writes for a point 100 m away linearises back to 100 m.
+        let c = gl * Vec4::new(0.0, 0.0, -100.0, 1.0);
+        let window_depth = (c.z / c.w + 1.0) * 0.5;
+        let d = linearize_depth(window_depth, &gl, flagged.depth);
+        assert!((d - 100.0).abs() < 0.05, "{d}");
+        // Without the flag the same buffer value reads as another distance: the silent misread
+        // the flag exists for.
+        let misread = linearize_depth(window_depth, &gl, DepthConvention::default());
+        assert!((misread - 100.0).abs() > 10.0, "{misread}");
+    }
+
+    #[test]
+    fn a_far_plane_beyond_f32_reach_must_be_declared_infinite_and_says_why() {
+        let cam = |infinite_far| Camera {
+            view: Mat4::IDENTITY,
+            projection: Mat4::perspective_rh(1.0, 1.5, 0.01, 1e13),
+            depth: conv(false, infinite_far),
+        };
+        cam(true).derive().unwrap();
+        let e = cam(false).derive().unwrap_err().to_string();
+        assert!(e.contains("in f32") && e.contains("far/near"), "{e}");
+        // A far plane well within reach must still be declared truthfully, and the message
+        // quotes it short.
+        let cam = Camera {
+            view: Mat4::IDENTITY,
+            projection: Mat4::perspective_rh(1.0, 1.5, 1.0, 200_000.0),
+            depth: conv(false, true),
+        };
+        let e = cam.derive().unwrap_err().to_string();
+        assert!(e.contains("far plane") && e.len() < 260, "{e}");
     }
 
     type Case = (Mat4, DepthConvention, fn(f32) -> f32);

@@ -1,15 +1,15 @@
 //! [`Headless`]: Nimbus on a device of its own (software Vulkan is fine), rendering into
 //! textures it owns and reading them back. For tests, tools and hosts without a GPU API.
 
-use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use half::f16;
 
+pub use crate::device::create_device;
+use crate::device::{gpu_scope, read_texture, texture_2d, DeviceErrors};
 use crate::error::{invalid_target, Error, Result};
 use crate::frame::FrameInputs;
 use crate::gpu::noise::NoiseVolume;
-use crate::gpu::readback::read_texture;
 use crate::renderer::{ColorTargets, Renderer, Targets};
 use crate::settings::Settings;
 
@@ -122,100 +122,9 @@ pub struct Headless {
     queue: wgpu::Queue,
     adapter_info: wgpu::AdapterInfo,
     renderer: Renderer,
-    errors: Arc<Mutex<Vec<String>>>,
+    errors: DeviceErrors,
     targets: Option<OwnedTargets>,
     in_place: bool,
-}
-
-/// A device of Nimbus's own, and the window surface it presents to, if any.
-pub(crate) struct OwnedDevice {
-    pub device: wgpu::Device,
-    pub queue: wgpu::Queue,
-    pub adapter: wgpu::Adapter,
-    pub info: wgpu::AdapterInfo,
-    pub surface: Option<wgpu::Surface<'static>>,
-}
-
-/// Creates a device on the first adapter found (compatible with `window` when given).
-/// Backends follow `WGPU_BACKEND` when set (e.g. `vulkan`), else the platform's primary ones.
-/// wgpu's debug flag stays off: Debian's validation layers misread naga's debug SPIR-V.
-///
-/// # Safety
-/// The handles in `window` must stay valid for the life of the returned surface.
-pub(crate) unsafe fn create_owned_device(
-    window: Option<wgpu::SurfaceTargetUnsafe>,
-) -> Result<OwnedDevice> {
-    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
-    desc.backends = wgpu::Backends::PRIMARY;
-    desc.flags = wgpu::InstanceFlags::empty();
-    let instance = wgpu::Instance::new(desc.with_env());
-    let surface = match window {
-        Some(target) => Some(
-            // SAFETY: the caller guarantees the handles outlive the surface.
-            unsafe { instance.create_surface_unsafe(target) }
-                .map_err(|e| Error::Surface(e.to_string()))?,
-        ),
-        None => None,
-    };
-    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-        power_preference: wgpu::PowerPreference::HighPerformance,
-        force_fallback_adapter: false,
-        compatible_surface: surface.as_ref(),
-        ..Default::default()
-    }))
-    .map_err(|e| {
-        Error::NoAdapter(format!(
-            "{e} (on Linux without a GPU, install Mesa's software Vulkan: mesa-vulkan-drivers)"
-        ))
-    })?;
-    let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
-    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
-        label: Some("nimbus"),
-        required_features: features,
-        required_limits: adapter.limits(),
-        ..Default::default()
-    }))
-    .map_err(|e| Error::RequestDevice(e.to_string()))?;
-    let info = adapter.get_info();
-    Ok(OwnedDevice {
-        device,
-        queue,
-        adapter,
-        info,
-        surface,
-    })
-}
-
-/// Creates a headless device on the first adapter found. Backends follow `WGPU_BACKEND` when
-/// set (e.g. `vulkan`), else the platform's primary ones.
-pub fn create_device() -> Result<(wgpu::Device, wgpu::Queue, wgpu::AdapterInfo)> {
-    // SAFETY: no window handles are involved.
-    let d = unsafe { create_owned_device(None) }?;
-    Ok((d.device, d.queue, d.info))
-}
-
-/// Installs a handler that collects wgpu errors instead of panicking (wgpu's default).
-pub(crate) fn collect_uncaptured_errors(device: &wgpu::Device) -> Arc<Mutex<Vec<String>>> {
-    let errors = Arc::new(Mutex::new(Vec::new()));
-    let sink = errors.clone();
-    device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
-        if let Ok(mut v) = sink.lock() {
-            v.push(e.to_string());
-        }
-    }));
-    errors
-}
-
-/// Drains collected wgpu errors into one `Error::Gpu`.
-pub(crate) fn take_errors(errors: &Mutex<Vec<String>>) -> Result<()> {
-    let mut v = errors
-        .lock()
-        .map_err(|_| Error::Gpu("error log poisoned".into()))?;
-    if v.is_empty() {
-        Ok(())
-    } else {
-        Err(Error::Gpu(std::mem::take(&mut *v).join("; ")))
-    }
 }
 
 fn to_f16(data: &[[f32; 4]]) -> Vec<u8> {
@@ -240,7 +149,7 @@ impl Headless {
         settings.validate()?;
         let (device, queue, adapter_info) = create_device()?;
         // Nothing may panic: wgpu errors outside our scopes are collected and reported.
-        let errors = collect_uncaptured_errors(&device);
+        let errors = DeviceErrors::install(&device);
         let renderer = Renderer::new(&device, &queue, settings)?;
         Ok(Self {
             device,
@@ -274,7 +183,7 @@ impl Headless {
     }
 
     fn take_errors(&self) -> Result<()> {
-        take_errors(&self.errors)
+        self.errors.take()
     }
 
     /// (Re)creates the targets at `width`×`height`. The scene starts black with no depth.
@@ -287,12 +196,11 @@ impl Headless {
                 ));
             }
         }
-        let make = |label, format, usage| {
-            crate::gpu::texture_2d(&self.device, label, (width, height), format, usage)
-        };
+        let make =
+            |label, format, usage| texture_2d(&self.device, label, (width, height), format, usage);
         use wgpu::TextureUsages as U;
         let color_usage = U::TEXTURE_BINDING | U::RENDER_ATTACHMENT | U::COPY_DST | U::COPY_SRC;
-        let targets = crate::renderer::gpu_scope(&self.device, || {
+        let targets = gpu_scope(&self.device, || {
             let scene = make(
                 "nimbus scene color",
                 wgpu::TextureFormat::Rgba16Float,
@@ -395,6 +303,7 @@ impl Headless {
 
     /// Renders one frame and waits for it. Returns the wall time from submit to completion.
     pub fn render(&mut self, frame: &FrameInputs) -> Result<Duration> {
+        self.errors.check_lost()?;
         self.renderer.prepare(frame)?;
         // The field, not `targets()`: the renderer is borrowed mutably beside it.
         let t = self
@@ -422,11 +331,12 @@ impl Headless {
             },
         )?;
         let start = Instant::now();
-        let commands = crate::renderer::gpu_scope(&self.device, || encoder.finish())?;
+        let commands = gpu_scope(&self.device, || encoder.finish())?;
         self.queue.submit([commands]);
-        self.device
-            .poll(wgpu::PollType::wait_indefinitely())
-            .map_err(|e| Error::Gpu(e.to_string()))?;
+        let polled = self.device.poll(wgpu::PollType::wait_indefinitely());
+        // A lost device fails the poll: report the loss, not the poll.
+        self.errors.check_lost()?;
+        polled.map_err(|e| Error::Gpu(e.to_string()))?;
         let elapsed = start.elapsed();
         self.take_errors()?;
         Ok(elapsed)

@@ -23,6 +23,7 @@
 
 pub mod atmosphere;
 pub mod demo;
+pub mod device;
 pub mod error;
 pub mod ffi;
 pub mod frame;

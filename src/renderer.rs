@@ -6,6 +6,7 @@
 
 use wgpu::TextureFormat as F;
 
+use crate::device::gpu_scope;
 use crate::error::{invalid_target, Error, Result};
 use crate::frame::FrameInputs;
 use crate::gpu::composite::{CompositeCache, CompositeInputs, CompositeUniforms};
@@ -138,19 +139,6 @@ pub struct Renderer {
     history: History,
     timer: Option<GpuTimer>,
     frame_index: u32,
-}
-
-/// Runs `f` inside a validation error scope and turns a captured wgpu error into `Error::Gpu`.
-pub(crate) fn gpu_scope<T>(device: &wgpu::Device, f: impl FnOnce() -> T) -> Result<T> {
-    let oom = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-    let validation = device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let value = f();
-    let v = pollster::block_on(validation.pop());
-    let o = pollster::block_on(oom.pop());
-    match v.or(o) {
-        Some(e) => Err(Error::Gpu(e.to_string())),
-        None => Ok(value),
-    }
 }
 
 fn check_2d(target: &'static str, view: &wgpu::TextureView) -> Result<(u32, u32)> {
@@ -418,6 +406,25 @@ impl Renderer {
         self.weather_maps.commit(slots);
         self.timeline = timeline;
         Ok(())
+    }
+
+    /// Stops the weather where it is at host time `now`: a running transition freezes at its
+    /// current blend (baked on the GPU), a scheduled one is dropped, and the sky holds until
+    /// the next [`Renderer::set_weather`]. Submits its own small GPU work. On error nothing
+    /// changes.
+    pub fn cancel_weather(&mut self, now: f64) -> Result<()> {
+        let mut timeline = self.timeline.clone();
+        let action = timeline.hold(now)?;
+        let (device, queue) = (self.device.clone(), self.queue.clone());
+        let slots = gpu_scope(&device, || self.weather_maps.hold(&device, &queue, action))?;
+        self.weather_maps.commit(slots);
+        self.timeline = timeline;
+        Ok(())
+    }
+
+    /// The transition as seen at host time `time`: from and to, progress and phase.
+    pub fn weather_state(&self, time: f64) -> crate::weather::TransitionState {
+        self.timeline.state(time)
     }
 
     /// The weather at host time `time`: blended scalars, map weight and wind displacement.

@@ -416,8 +416,47 @@ impl Default for Settings {
     }
 }
 
+/// Shortest first light step accepted (m): below it the first sample sees no self-shadowing.
+const MIN_FIRST_LIGHT_STEP: f32 = 0.01;
+
+/// The light march's geometric partition, checked in f32 as the shader computes it: n steps
+/// growing by `growth` sum to `distance`, so the first is distance (r - 1) / (r^n - 1). Each
+/// field can be in range while the pair is not: 128 steps growing by 2 overflow r^n, the first
+/// step becomes 0 m and the clouds render fully sunlit.
+fn light_partition(steps: u32, growth: f32, distance: f32) -> Result<()> {
+    if growth <= 1.0001 {
+        return Ok(());
+    }
+    let total = growth.powf(steps as f32);
+    let first = distance * (growth - 1.0) / (total - 1.0);
+    if total.is_finite() && first >= MIN_FIRST_LIGHT_STEP {
+        return Ok(());
+    }
+    Err(invalid(
+        "lighting.light_step_growth",
+        format!(
+            "{} with lighting.light_steps {steps} over lighting.light_distance {} m makes the \
+             first light step {} m (at least {MIN_FIRST_LIGHT_STEP} m is needed{}): lower the \
+             growth or the step count",
+            crate::validate::num(growth),
+            crate::validate::num(distance),
+            if total.is_finite() {
+                crate::validate::num(first)
+            } else {
+                "0".into()
+            },
+            if total.is_finite() {
+                ""
+            } else {
+                "; growth^steps overflows f32"
+            }
+        ),
+    ))
+}
+
 impl Settings {
-    /// Checks every field; the error names the first offending one.
+    /// Checks every field and the combinations that interact (the light-step partition);
+    /// the error names the first offending field.
     pub fn validate(&self) -> Result<()> {
         positive("planet.radius", self.planet.radius)?;
         if !self.planet.up.is_finite() || self.planet.up.length() < 1e-6 {
@@ -465,6 +504,7 @@ impl Settings {
         count("lighting.light_steps", l.light_steps, 1, 128)?;
         positive("lighting.light_distance", l.light_distance)?;
         in_range("lighting.light_step_growth", l.light_step_growth, 1.0, 4.0)?;
+        light_partition(l.light_steps, l.light_step_growth, l.light_distance)?;
         let m = &self.march;
         count("march.max_steps", m.max_steps, 4, 1024)?;
         count("march.min_steps", m.min_steps, 1, m.max_steps)?;
@@ -624,6 +664,28 @@ mod tests {
         s.validate().unwrap();
         s.lighting.light_steps = 129;
         assert_eq!(refused(&s), "lighting.light_steps");
+    }
+
+    #[test]
+    fn light_steps_and_growth_are_checked_together() {
+        // Each in range, the pair not: 2^128 overflows f32 and the first step becomes 0 m.
+        let mut s = Settings::default();
+        s.lighting.light_steps = 128;
+        s.lighting.light_step_growth = 2.0;
+        assert_eq!(refused(&s), "lighting.light_step_growth");
+        let message = s.validate().unwrap_err().to_string();
+        assert!(message.contains("overflows"), "{message}");
+        // Finite but uselessly short first steps are refused too.
+        s.lighting.light_steps = 40;
+        assert_eq!(refused(&s), "lighting.light_step_growth");
+        // Every quality level's own light march passes.
+        for q in [Quality::Low, Quality::Medium, Quality::High, Quality::Ultra] {
+            let mut s = Settings::default();
+            q.apply(&mut s);
+            s.validate().unwrap();
+        }
+        s.lighting.light_steps = 16;
+        s.validate().unwrap();
     }
 
     #[test]

@@ -29,8 +29,9 @@ fn c_programs_pass_and_match_the_rust_render() {
         .map(PathBuf::from)
         .unwrap_or_else(|| root.join("target"));
     // `cargo test` builds no cdylib: build it (cargo releases its lock while tests run).
+    // With the test hooks (panic, device loss), which the release library never exports.
     let status = Command::new(env!("CARGO"))
-        .args(["build", "--lib"])
+        .args(["build", "--lib", "--features", "test-hooks"])
         .current_dir(&root)
         .status()
         .expect("run cargo build --lib");
@@ -55,6 +56,17 @@ fn c_programs_pass_and_match_the_rust_render() {
     assert!(
         stdout.contains(" passed, 0 failed"),
         "C API test summary missing:\n{stdout}"
+    );
+    let cases: usize = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("bad-input cases: "))
+        .and_then(|n| n.trim().parse().ok())
+        .expect("the C test reports its bad-input case count");
+    assert!(cases >= 60, "only {cases} bad-input cases");
+    // Caught panics go to the log callback, never to the host's stderr.
+    assert!(
+        !stderr.contains("panicked at"),
+        "a panic message reached stderr:\n{stderr}"
     );
 
     // The same view in Rust: jitter off, plain sky color, no depth, sRGB output.

@@ -113,3 +113,20 @@ fn settings_change_of_a_scale_bakes_nothing_and_keeps_the_noise() {
     assert!(h.renderer().bind_groups_created() > made);
     assert_ne!(h.read_noise(nimbus::NoiseVolume::Base, 0).unwrap(), before);
 }
+
+#[test]
+fn a_lost_device_is_reported_and_a_new_one_works() {
+    let mut h = headless(small_noise(6));
+    frames(&mut h, 0..2);
+    h.device().destroy();
+    let e = h.render(&moving_frame(2)).unwrap_err();
+    assert!(matches!(e, nimbus::Error::DeviceLost(_)), "{e}");
+    // It stays lost, with the same error, and never panics.
+    assert!(matches!(
+        h.render(&moving_frame(3)),
+        Err(nimbus::Error::DeviceLost(_))
+    ));
+    drop(h);
+    let mut again = headless(small_noise(6));
+    frames(&mut again, 0..2);
+}

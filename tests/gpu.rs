@@ -268,6 +268,7 @@ fn depth_conventions_see_the_same_clouds() {
             DepthConvention {
                 reversed_z: true,
                 infinite_far: true,
+                ..Default::default()
             },
         ),
         (
@@ -275,6 +276,7 @@ fn depth_conventions_see_the_same_clouds() {
             DepthConvention {
                 reversed_z: false,
                 infinite_far: true,
+                ..Default::default()
             },
         ),
     ] {

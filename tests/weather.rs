@@ -231,3 +231,55 @@ fn bad_weather_requests_are_errors_and_change_nothing() {
         Weather::stormy().clouds
     );
 }
+
+#[test]
+fn cancel_holds_the_sky_as_it_is_and_drops_what_was_scheduled() {
+    let mut h = headless(quiet(small_noise(2)));
+    h.renderer_mut()
+        .set_weather(Weather::stormy(), 0.0, 20.0)
+        .unwrap();
+    let mid = render(&mut h, 0, 8.0);
+    let state = h.renderer().weather_state(8.0);
+    assert_eq!(
+        (state.from.as_str(), state.to.as_str()),
+        ("sparse", "stormy")
+    );
+    assert!(state.progress > 0.0 && state.progress < 1.0);
+    let before = h.renderer().weather_at(8.0);
+    h.renderer_mut().cancel_weather(8.0).unwrap();
+    assert_eq!(h.renderer().weather_at(8.0).weather, before.weather);
+    // The same sky at the moment of the cancel: the held map is the blend it froze, stored in
+    // 8 bits, which moves a few edge pixels (a coarse probe may then step past a thin wisp)
+    // and nothing else.
+    let held = render(&mut h, 0, 8.0);
+    let mean = mid
+        .iter()
+        .zip(&held)
+        .map(|(p, q)| (p[0] - q[0]).abs())
+        .sum::<f32>()
+        / mid.len() as f32;
+    let moved = mid
+        .iter()
+        .zip(&held)
+        .filter(|(p, q)| (p[0] - q[0]).abs() > 0.02)
+        .count();
+    assert!(mean < 1e-3, "mean change {mean}");
+    assert!(
+        moved * 100 < mid.len(),
+        "{moved} of {} pixels moved",
+        mid.len()
+    );
+    let (from, to) = h.read_weather_maps().unwrap();
+    assert_eq!(from, to, "the held sky uses one map");
+    // ...and it stays there: no further progress toward stormy (only the wind moves it).
+    let state = h.renderer().weather_state(60.0);
+    assert_eq!(state.phase, nimbus::weather::TransitionPhase::Done);
+    assert_eq!(h.renderer().weather_at(60.0).weather, before.weather);
+    // A scheduled transition is dropped by a cancel before its start.
+    h.renderer_mut()
+        .set_weather(Weather::clear(), 100.0, 5.0)
+        .unwrap();
+    h.renderer_mut().cancel_weather(90.0).unwrap();
+    assert_eq!(h.renderer().weather_at(200.0).weather, before.weather);
+    assert!(h.renderer_mut().cancel_weather(f64::NAN).is_err());
+}

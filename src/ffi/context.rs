@@ -4,15 +4,15 @@ use std::ffi::{c_char, CString};
 use std::num::NonZeroIsize;
 use std::ptr::NonNull;
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 use glam::{Mat4, Vec3};
 use raw_window_handle as rwh;
 
+use super::texture::format_name;
 use super::*;
-use crate::headless::{
-    collect_uncaptured_errors, create_owned_device, take_errors, MAX_HEADLESS_SIZE,
-};
+use crate::device::{create_owned_device, gpu_scope, DeviceErrors};
+use crate::headless::MAX_HEADLESS_SIZE;
 use crate::renderer::{ColorTargets, Targets};
 use crate::settings::Quality;
 use crate::weather::{Preset, Weather};
@@ -41,7 +41,7 @@ pub(crate) struct ContextInner {
     pub(crate) device: wgpu::Device,
     pub(crate) queue: wgpu::Queue,
     renderer: Renderer,
-    errors: Arc<Mutex<Vec<String>>>,
+    errors: DeviceErrors,
     presenter: Option<Presenter>,
     adapter_name: CString,
 }
@@ -49,12 +49,11 @@ pub(crate) struct ContextInner {
 /// Runs `f` on a live, unpoisoned context inside the panic boundary, keeping the context's
 /// last error. A panic poisons the context.
 ///
-/// # Safety
-/// `ctx` must be NULL or a live context.
+/// Safety: `ctx` must be NULL or a live context.
 pub(crate) unsafe fn with_ctx(
     ctx: *mut NimbusContext,
-    f: impl FnOnce(&mut ContextInner) -> FfiResult<i32>,
-) -> i32 {
+    f: impl FnOnce(&mut ContextInner) -> FfiResult<NimbusResult>,
+) -> NimbusResult {
     // SAFETY: NULL is checked; otherwise the caller guarantees a live context.
     let Some(c) = (unsafe { ctx.as_mut() }) else {
         set_thread_error("`ctx` is NULL");
@@ -65,6 +64,12 @@ pub(crate) unsafe fn with_ctx(
         set_thread_error(msg);
         c.last_error = CString::new(msg).unwrap_or_default();
         return NIMBUS_ERROR_POISONED;
+    }
+    if let Err(e) = c.inner.errors.check_lost() {
+        let e = FfiError::from(e);
+        set_thread_error(&e.message);
+        c.last_error = CString::new(e.message.replace('\0', " ")).unwrap_or_default();
+        return e.code;
     }
     let inner = &mut c.inner;
     let mut failure: Option<(String, bool)> = None;
@@ -121,47 +126,114 @@ fn quality(id: u32) -> FfiResult<Quality> {
     }
 }
 
-fn settings_from_chain(mut next: *const NimbusChainedStruct) -> FfiResult<Settings> {
-    check_chain(next, &[NIMBUS_STYPE_SETTINGS])?;
-    let mut s = Settings::default();
+/// The links of a validated chain, as (s_type, pointer to the link).
+fn links(mut next: *const NimbusChainedStruct) -> Vec<(u32, *const NimbusChainedStruct)> {
+    let mut v = Vec::new();
     while !next.is_null() {
-        // SAFETY: validated chain; NIMBUS_STYPE_SETTINGS links are NimbusSettingsExt.
+        // SAFETY: the chain was validated by check_chain; NULL ends it.
         let link = unsafe { &*next };
-        if link.s_type == NIMBUS_STYPE_SETTINGS {
-            // SAFETY: the header says a NimbusSettingsExt starts with its chain header.
-            let ext = unsafe { &*next.cast::<NimbusSettingsExt>() };
-            if ext.initial_preset != 0 {
-                s.weather = preset(ext.initial_preset)?;
-            }
-            // The level first: the explicit fields below refine it.
-            match ext.quality {
-                NIMBUS_QUALITY_DEFAULT => {}
-                q => quality(q)?.apply(&mut s),
-            }
-            if ext.noise_seed != 0 {
-                s.noise.seed = ext.noise_seed;
-            }
-            if ext.march_max_steps != 0 {
-                s.march.max_steps = ext.march_max_steps;
-            }
-            if ext.march_min_steps != 0 {
-                s.march.min_steps = ext.march_min_steps;
-            }
-            s.march.jitter = match ext.jitter {
-                NIMBUS_JITTER_DEFAULT | NIMBUS_JITTER_ON => true,
-                NIMBUS_JITTER_OFF => false,
-                j => return Err(FfiError::arg(format!("unknown jitter value {j}"))),
-            };
-            if ext.max_distance != 0.0 {
-                s.march.max_distance = ext.max_distance;
-            }
-            if ext.planet_radius != 0.0 {
-                s.planet.radius = ext.planet_radius;
-            }
-        }
+        v.push((link.s_type, next));
         next = link.next;
     }
+    v
+}
+
+/// Where ABI 0.1's `NimbusSettingsExt` carried `quality`: in what is now its tail padding. A
+/// 0.1 header declared the field there, so for 0.1 hosts it is read from there (the bytes
+/// exist either way: the struct is 48 bytes in both layouts).
+const V0_1_QUALITY_OFFSET: usize = 44;
+
+/// The settings a creation chain asks for. `abi_minor` is the header's minor version.
+fn settings_from_chain(next: *const NimbusChainedStruct, abi_minor: u32) -> FfiResult<Settings> {
+    check_chain(next, &[NIMBUS_STYPE_SETTINGS, NIMBUS_STYPE_QUALITY])?;
+    let links = links(next);
+    for kind in [NIMBUS_STYPE_SETTINGS, NIMBUS_STYPE_QUALITY] {
+        if links.iter().filter(|(t, _)| *t == kind).count() > 1 {
+            return Err(FfiError::new(
+                NIMBUS_ERROR_UNKNOWN_STRUCT,
+                format!("the chain holds s_type {kind} twice; give each extension once"),
+            ));
+        }
+    }
+    let find = |kind| links.iter().find(|(t, _)| *t == kind).map(|(_, p)| *p);
+    let mut s = Settings::default();
+    // The level first: the explicit march fields of the settings extension refine it.
+    let mut level = NIMBUS_QUALITY_DEFAULT;
+    if let Some(p) = find(NIMBUS_STYPE_QUALITY) {
+        // SAFETY: a NIMBUS_STYPE_QUALITY link is a NimbusQualityExt per the header.
+        level = unsafe { &*p.cast::<NimbusQualityExt>() }.quality;
+    } else if let (Some(p), 1) = (find(NIMBUS_STYPE_SETTINGS), abi_minor) {
+        // SAFETY: a NimbusSettingsExt is 48 bytes; offset 44 lies inside it.
+        level = unsafe {
+            p.cast::<u8>()
+                .add(V0_1_QUALITY_OFFSET)
+                .cast::<u32>()
+                .read_unaligned()
+        };
+    }
+    if level != NIMBUS_QUALITY_DEFAULT {
+        quality(level)?.apply(&mut s);
+    }
+    if let Some(p) = find(NIMBUS_STYPE_SETTINGS) {
+        // SAFETY: a NIMBUS_STYPE_SETTINGS link is a NimbusSettingsExt per the header.
+        let ext = unsafe { &*p.cast::<NimbusSettingsExt>() };
+        if ext.initial_preset != 0 {
+            s.weather = preset(ext.initial_preset)?;
+        }
+        if ext.noise_seed != 0 {
+            s.noise.seed = ext.noise_seed;
+        }
+        if ext.march_max_steps != 0 {
+            s.march.max_steps = ext.march_max_steps;
+            // A defaulted minimum follows a smaller maximum instead of exceeding it.
+            s.march.min_steps = s.march.min_steps.min(ext.march_max_steps);
+        }
+        if ext.march_min_steps != 0 {
+            s.march.min_steps = ext.march_min_steps;
+        }
+        s.march.jitter = match ext.jitter {
+            NIMBUS_JITTER_DEFAULT | NIMBUS_JITTER_ON => true,
+            NIMBUS_JITTER_OFF => false,
+            j => {
+                return Err(FfiError::arg(format!(
+                    "unknown jitter value {j} (valid: 0 = default, 1 = on, 2 = off)"
+                )))
+            }
+        };
+        if ext.max_distance != 0.0 {
+            s.march.max_distance = ext.max_distance;
+        }
+        if ext.planet_radius != 0.0 {
+            s.planet.radius = ext.planet_radius;
+        }
+    }
     Ok(s)
+}
+
+/// The ABI rule: the same major version, and a minor from the first this library serves
+/// (NIMBUS_ABI_MIN_MINOR) up to its own. 0 is what a forgotten field holds: never valid.
+/// Returns the header's minor version.
+pub(crate) fn check_abi_version(abi_version: u32) -> FfiResult<u32> {
+    let (major, minor) = (abi_version >> 16, abi_version & 0xffff);
+    let ours = format!("{NIMBUS_VERSION_MAJOR}.{NIMBUS_VERSION_MINOR}");
+    if abi_version == 0 {
+        return Err(FfiError::new(
+            NIMBUS_ERROR_ABI_VERSION,
+            format!("abi_version is 0: set NimbusContextDesc.abi_version = NIMBUS_ABI_VERSION (this library is ABI {ours})"),
+        ));
+    }
+    if major != NIMBUS_VERSION_MAJOR
+        || !(NIMBUS_ABI_MIN_MINOR..=NIMBUS_VERSION_MINOR).contains(&minor)
+    {
+        return Err(FfiError::new(
+            NIMBUS_ERROR_ABI_VERSION,
+            format!(
+                "the header is ABI {major}.{minor} but this library serves ABI \
+                 {NIMBUS_VERSION_MAJOR}.{NIMBUS_ABI_MIN_MINOR} to {ours}: build against this library's nimbus.h"
+            ),
+        ));
+    }
+    Ok(minor)
 }
 
 fn window_target(w: &NimbusWindowHandle) -> FfiResult<wgpu::SurfaceTargetUnsafe> {
@@ -215,18 +287,8 @@ fn check_size(width: u32, height: u32) -> FfiResult {
 
 impl ContextInner {
     fn create(desc: &NimbusContextDesc) -> FfiResult<Self> {
-        let major = desc.abi_version >> 16;
-        let minor = desc.abi_version & 0xffff;
-        if major != NIMBUS_VERSION_MAJOR || minor > NIMBUS_VERSION_MINOR {
-            return Err(FfiError::new(
-                NIMBUS_ERROR_ABI_VERSION,
-                format!(
-                    "the header is ABI {major}.{minor} but the library is {NIMBUS_VERSION_MAJOR}.{NIMBUS_VERSION_MINOR}: \
-                     rebuild against this library's nimbus.h"
-                ),
-            ));
-        }
-        let settings = settings_from_chain(desc.next)?;
+        let minor = check_abi_version(desc.abi_version)?;
+        let settings = settings_from_chain(desc.next, minor)?;
         // SAFETY: checked for NULL; the caller guarantees validity otherwise.
         let window = unsafe { desc.window.as_ref() };
         let target = match window {
@@ -238,7 +300,7 @@ impl ContextInner {
         };
         // SAFETY: the header requires the window handles to outlive the context.
         let owned = unsafe { create_owned_device(target) }?;
-        let errors = collect_uncaptured_errors(&owned.device);
+        let errors = DeviceErrors::install(&owned.device);
         let presenter = match owned.surface {
             Some(surface) => {
                 let caps = surface.get_capabilities(&owned.adapter);
@@ -270,9 +332,7 @@ impl ContextInner {
                 config.format = format;
                 config.present_mode = wgpu::PresentMode::Fifo;
                 config.view_formats = vec![];
-                crate::renderer::gpu_scope(&owned.device, || {
-                    surface.configure(&owned.device, &config)
-                })?;
+                gpu_scope(&owned.device, || surface.configure(&owned.device, &config))?;
                 Some(Presenter { surface, config })
             }
             None => None,
@@ -293,10 +353,10 @@ impl ContextInner {
         })
     }
 
-    fn render(&mut self, frame: &NimbusFrame, targets: &NimbusTargets) -> FfiResult<i32> {
+    fn render(&mut self, frame: &NimbusFrame, targets: &NimbusTargets) -> FfiResult<NimbusResult> {
         check_chain(frame.next, &[])?;
         check_chain(targets.next, &[])?;
-        let known = NIMBUS_DEPTH_REVERSED_Z | NIMBUS_DEPTH_INFINITE_FAR;
+        let known = NIMBUS_DEPTH_REVERSED_Z | NIMBUS_DEPTH_INFINITE_FAR | NIMBUS_DEPTH_GL_CLIP_Z;
         if frame.depth_flags & !known != 0 {
             return Err(FfiError::arg(format!(
                 "unknown depth flags {:#x}",
@@ -311,6 +371,7 @@ impl ContextInner {
                 depth: DepthConvention {
                     reversed_z: frame.depth_flags & NIMBUS_DEPTH_REVERSED_Z != 0,
                     infinite_far: frame.depth_flags & NIMBUS_DEPTH_INFINITE_FAR != 0,
+                    gl_clip_z: frame.depth_flags & NIMBUS_DEPTH_GL_CLIP_Z != 0,
                 },
             },
             sun: Sun {
@@ -341,6 +402,11 @@ impl ContextInner {
                 tex.check_owner(self.id, name)?;
             }
         }
+        let surface_size = self
+            .presenter
+            .as_ref()
+            .map(|p| (p.config.width, p.config.height));
+        check_c_targets(scene, depth, output, surface_size)?;
         self.renderer.prepare(&inputs)?;
         let mut encoder = self.device.create_command_encoder(&Default::default());
         let depth_view = depth.map(|d| &d.view);
@@ -402,9 +468,80 @@ impl ContextInner {
                 NIMBUS_OK
             }
         };
-        take_errors(&self.errors)?;
+        self.errors.take()?;
         Ok(status)
     }
+}
+
+fn invalid_target(message: String) -> FfiError {
+    FfiError::new(NIMBUS_ERROR_INVALID_TARGET, message)
+}
+
+/// The target rules in the C API's own terms (NIMBUS_FORMAT_* names, the `targets.*` fields),
+/// checked before the renderer's checks, whose messages speak of Rust and wgpu types.
+fn check_c_targets(
+    scene: &NimbusTexture,
+    depth: Option<&NimbusTexture>,
+    output: Option<&NimbusTexture>,
+    surface_size: Option<(u32, u32)>,
+) -> FfiResult {
+    let size = |t: &NimbusTexture| format!("{}x{}", t.size().0, t.size().1);
+    if scene.format == NIMBUS_FORMAT_R32_FLOAT {
+        return Err(invalid_target(
+            "targets.scene_color is NIMBUS_FORMAT_R32_FLOAT, a depth format: give a color texture"
+                .into(),
+        ));
+    }
+    if let Some(d) = depth {
+        if d.format != NIMBUS_FORMAT_R32_FLOAT {
+            return Err(invalid_target(format!(
+                "targets.scene_depth must be NIMBUS_FORMAT_R32_FLOAT (clip-space depth), got {}",
+                format_name(d.format)
+            )));
+        }
+        if d.size() != scene.size() {
+            return Err(invalid_target(format!(
+                "targets.scene_depth is {} but targets.scene_color is {}: all targets must have one size",
+                size(d),
+                size(scene)
+            )));
+        }
+    }
+    match output {
+        Some(out) => {
+            if out.format == NIMBUS_FORMAT_R32_FLOAT {
+                return Err(invalid_target(
+                    "targets.output is NIMBUS_FORMAT_R32_FLOAT, a depth format: give a color texture".into(),
+                ));
+            }
+            if std::ptr::eq(out, scene) && out.format == NIMBUS_FORMAT_RGBA32_FLOAT {
+                return Err(invalid_target(
+                    "compositing in place (targets.output == targets.scene_color) needs a blendable \
+                     format, and NIMBUS_FORMAT_RGBA32_FLOAT is not: use a separate output texture"
+                        .into(),
+                ));
+            }
+            if out.size() != scene.size() {
+                return Err(invalid_target(format!(
+                    "targets.output is {} but targets.scene_color is {}: all targets must have one size",
+                    size(out),
+                    size(scene)
+                )));
+            }
+        }
+        None => {
+            if let Some((w, h)) = surface_size {
+                if (w, h) != scene.size() {
+                    return Err(invalid_target(format!(
+                        "targets.scene_color is {} but the window surface is {w}x{h}: \
+                         resize the scene or call nimbus_context_resize",
+                        size(scene)
+                    )));
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Creates a context: its own GPU device (any adapter; Mesa's software Vulkan works), a
@@ -412,13 +549,12 @@ impl ContextInner {
 /// the noise volumes are baked. On success writes the handle to `*out`; on failure `*out` is
 /// untouched and `nimbus_context_last_error(NULL)` says why.
 ///
-/// # Safety
-/// `desc` and `out` must be NULL or valid; the chain and window handles must be valid.
+/// Safety: `desc` and `out` must be NULL or valid; the chain and window handles must be valid.
 #[no_mangle]
 pub unsafe extern "C" fn nimbus_context_create(
     desc: *const NimbusContextDesc,
     out: *mut *mut NimbusContext,
-) -> i32 {
+) -> NimbusResult {
     boundary(
         || {
             // SAFETY: checked for NULL; the caller guarantees validity otherwise.
@@ -442,17 +578,20 @@ pub unsafe extern "C" fn nimbus_context_create(
 
 /// Destroys a context (waiting for its GPU work). NULL is a no-op.
 ///
-/// # Safety
-/// `ctx` must be NULL or a context from `nimbus_context_create`, not yet destroyed.
+/// Safety: `ctx` must be NULL or a context from `nimbus_context_create`, not yet destroyed.
 #[no_mangle]
 pub unsafe extern "C" fn nimbus_context_destroy(ctx: *mut NimbusContext) {
     if !ctx.is_null() {
-        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            // SAFETY: created by Box::into_raw in nimbus_context_create, destroyed once.
-            let ctx = unsafe { Box::from_raw(ctx) };
-            let _ = ctx.inner.device.poll(wgpu::PollType::wait_indefinitely());
-            drop(ctx);
-        }));
+        boundary(
+            || {
+                // SAFETY: created by Box::into_raw in nimbus_context_create, destroyed once.
+                let ctx = unsafe { Box::from_raw(ctx) };
+                let _ = ctx.inner.device.poll(wgpu::PollType::wait_indefinitely());
+                drop(ctx);
+                Ok(NIMBUS_OK)
+            },
+            |_, _| {},
+        );
     }
 }
 
@@ -460,8 +599,7 @@ pub unsafe extern "C" fn nimbus_context_destroy(ctx: *mut NimbusContext) {
 /// thread (e.g. a failed `nimbus_context_create`). Empty after a success. Valid until the next
 /// call with the same context (or on this thread); never free it.
 ///
-/// # Safety
-/// `ctx` must be NULL or a live context.
+/// Safety: `ctx` must be NULL or a live context.
 #[no_mangle]
 pub unsafe extern "C" fn nimbus_context_last_error(ctx: *const NimbusContext) -> *const c_char {
     // SAFETY: NULL is checked; otherwise the caller guarantees a live context.
@@ -474,8 +612,7 @@ pub unsafe extern "C" fn nimbus_context_last_error(ctx: *const NimbusContext) ->
 /// The GPU adapter in use, e.g. "llvmpipe (LLVM 15.0.6, 256 bits) (Vulkan)". NULL for a NULL
 /// context. Valid while the context lives.
 ///
-/// # Safety
-/// `ctx` must be NULL or a live context.
+/// Safety: `ctx` must be NULL or a live context.
 #[no_mangle]
 pub unsafe extern "C" fn nimbus_context_adapter_name(ctx: *const NimbusContext) -> *const c_char {
     // SAFETY: NULL is checked; otherwise the caller guarantees a live context.
@@ -489,14 +626,13 @@ pub unsafe extern "C" fn nimbus_context_adapter_name(ctx: *const NimbusContext) 
 /// composited into `targets->output` or presented to the window when `output` is NULL. Returns
 /// `NIMBUS_STATUS_FRAME_SKIPPED` when the window could not take a frame (render again).
 ///
-/// # Safety
-/// `ctx`, `frame`, `targets` and the textures they point to must be NULL or valid.
+/// Safety: `ctx`, `frame`, `targets` and the textures they point to must be NULL or valid.
 #[no_mangle]
 pub unsafe extern "C" fn nimbus_context_render(
     ctx: *mut NimbusContext,
     frame: *const NimbusFrame,
     targets: *const NimbusTargets,
-) -> i32 {
+) -> NimbusResult {
     // SAFETY: checked below; the caller guarantees validity.
     unsafe {
         with_ctx(ctx, |inner| {
@@ -510,14 +646,13 @@ pub unsafe extern "C" fn nimbus_context_render(
 /// Resizes the window surface (windowed contexts; for headless ones the size only is checked).
 /// On failure the previous size stays in use.
 ///
-/// # Safety
-/// `ctx` must be NULL or a live context.
+/// Safety: `ctx` must be NULL or a live context.
 #[no_mangle]
 pub unsafe extern "C" fn nimbus_context_resize(
     ctx: *mut NimbusContext,
     width: u32,
     height: u32,
-) -> i32 {
+) -> NimbusResult {
     // SAFETY: the caller guarantees a live context or NULL.
     unsafe {
         with_ctx(ctx, |inner| {
@@ -527,7 +662,7 @@ pub unsafe extern "C" fn nimbus_context_resize(
                 config.width = width;
                 config.height = height;
                 let (surface, device) = (&p.surface, &inner.device);
-                crate::renderer::gpu_scope(device, || surface.configure(device, &config))?;
+                gpu_scope(device, || surface.configure(device, &config))?;
                 p.config = config;
             }
             Ok(NIMBUS_OK)
@@ -557,8 +692,7 @@ fn weather_with(mut w: Weather, options: u32) -> FfiResult<Weather> {
 /// transition already running is frozen where it is and continued from, so the sky never
 /// jumps. Requests must come in time order.
 ///
-/// # Safety
-/// `ctx` must be NULL or a live context.
+/// Safety: `ctx` must be NULL or a live context.
 #[no_mangle]
 pub unsafe extern "C" fn nimbus_context_set_weather(
     ctx: *mut NimbusContext,
@@ -566,7 +700,7 @@ pub unsafe extern "C" fn nimbus_context_set_weather(
     options: u32,
     start: f64,
     duration: f64,
-) -> i32 {
+) -> NimbusResult {
     // SAFETY: the caller guarantees a live context or NULL.
     unsafe {
         with_ctx(ctx, |inner| {
@@ -580,15 +714,14 @@ pub unsafe extern "C" fn nimbus_context_set_weather(
 /// Like `nimbus_context_set_weather`, with the weather read from a TOML preset file. A missing
 /// or malformed file returns `NIMBUS_ERROR_PRESET_FILE`; the message names the line and field.
 ///
-/// # Safety
-/// `ctx` must be NULL or a live context; `path` NULL or a NUL-terminated UTF-8 path.
+/// Safety: `ctx` must be NULL or a live context; `path` NULL or a NUL-terminated UTF-8 path.
 #[no_mangle]
 pub unsafe extern "C" fn nimbus_context_load_weather(
     ctx: *mut NimbusContext,
     path: *const c_char,
     start: f64,
     duration: f64,
-) -> i32 {
+) -> NimbusResult {
     // SAFETY: the caller guarantees a live context or NULL, and a valid string or NULL.
     unsafe {
         with_ctx(ctx, |inner| {
@@ -600,13 +733,165 @@ pub unsafe extern "C" fn nimbus_context_load_weather(
     }
 }
 
+/// Like `nimbus_context_load_weather`, with the preset's TOML text in memory (`size` bytes,
+/// UTF-8, no NUL needed): for engines that ship packed assets. The same size limit and checks
+/// as for files apply; errors name the line and field.
+///
+/// Safety: `ctx` must be NULL or a live context; `text` NULL or `size` readable bytes.
+#[no_mangle]
+pub unsafe extern "C" fn nimbus_context_set_weather_toml(
+    ctx: *mut NimbusContext,
+    text: *const c_char,
+    size: usize,
+    start: f64,
+    duration: f64,
+) -> NimbusResult {
+    // SAFETY: the caller guarantees a live context or NULL, and `size` readable bytes.
+    unsafe {
+        with_ctx(ctx, |inner| {
+            if text.is_null() {
+                return Err(FfiError::null("text"));
+            }
+            if size > crate::weather::preset::MAX_PRESET_BYTES {
+                return Err(FfiError::new(
+                    NIMBUS_ERROR_PRESET_FILE,
+                    format!(
+                        "the preset text is {size} bytes; a preset is at most {} bytes",
+                        crate::weather::preset::MAX_PRESET_BYTES
+                    ),
+                ));
+            }
+            let bytes = std::slice::from_raw_parts(text.cast::<u8>(), size);
+            let text = std::str::from_utf8(bytes).map_err(|_| {
+                FfiError::new(NIMBUS_ERROR_PRESET_FILE, "the preset text is not UTF-8")
+            })?;
+            let w = Weather::from_toml(text, "<memory>")?;
+            inner.renderer.set_weather(w, start, duration)?;
+            Ok(NIMBUS_OK)
+        })
+    }
+}
+
+/// Writes a built-in preset (`NIMBUS_PRESET_*` with `NIMBUS_WEATHER_*` options) as TOML, the
+/// template for preset files: with `buf` NULL, writes the size it needs (NUL included) to
+/// `*size`; otherwise `*size` must hold `buf`'s capacity, the text is written NUL-terminated
+/// and `*size` becomes its length with the NUL. A too small buffer is
+/// NIMBUS_ERROR_INVALID_ARGUMENT (nothing written).
+///
+/// Safety: `size` must be NULL or valid; `buf` NULL or `*size` writable bytes.
+#[no_mangle]
+pub unsafe extern "C" fn nimbus_preset_write_toml(
+    preset_id: u32,
+    options: u32,
+    buf: *mut c_char,
+    size: *mut usize,
+) -> NimbusResult {
+    boundary(
+        || {
+            // SAFETY: checked for NULL; the caller guarantees validity.
+            let size = unsafe { size.as_mut() }.ok_or_else(|| FfiError::null("size"))?;
+            let text = weather_with(preset(preset_id)?, options)?.to_toml();
+            let needed = text.len() + 1;
+            if buf.is_null() {
+                *size = needed;
+                return Ok(NIMBUS_OK);
+            }
+            if *size < needed {
+                return Err(FfiError::arg(format!(
+                    "the buffer holds {} bytes but the template needs {needed}",
+                    *size
+                )));
+            }
+            // SAFETY: `buf` has `*size` >= needed writable bytes per the caller's contract.
+            unsafe {
+                std::ptr::copy_nonoverlapping(text.as_ptr(), buf.cast::<u8>(), text.len());
+                *buf.add(text.len()) = 0;
+            }
+            *size = needed;
+            Ok(NIMBUS_OK)
+        },
+        |_, _| {},
+    )
+}
+
+fn name_field(name: &str) -> [c_char; NIMBUS_WEATHER_NAME_CAPACITY] {
+    let mut out = [0 as c_char; NIMBUS_WEATHER_NAME_CAPACITY];
+    // Cut on a character boundary, leaving room for the NUL.
+    let mut end = name.len().min(NIMBUS_WEATHER_NAME_CAPACITY - 1);
+    while !name.is_char_boundary(end) {
+        end -= 1;
+    }
+    for (o, b) in out.iter_mut().zip(&name.as_bytes()[..end]) {
+        *o = *b as c_char;
+    }
+    out
+}
+
+/// Writes where the weather transition stands at host time `time` to `*out`: from and to,
+/// start, duration, progress and phase.
+///
+/// Safety: `ctx` must be NULL or a live context; `out` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn nimbus_context_weather_state(
+    ctx: *mut NimbusContext,
+    time: f64,
+    out: *mut NimbusWeatherState,
+) -> NimbusResult {
+    // SAFETY: the caller guarantees a live context or NULL, and `out` writable or NULL.
+    unsafe {
+        with_ctx(ctx, |inner| {
+            let out = out.as_mut().ok_or_else(|| FfiError::null("out"))?;
+            check_chain(out.next, &[])?;
+            if !time.is_finite() {
+                return Err(FfiError::arg(format!(
+                    "time must be finite, got {}",
+                    crate::validate::num(time)
+                )));
+            }
+            let s = inner.renderer.weather_state(time);
+            *out = NimbusWeatherState {
+                next: out.next,
+                from_name: name_field(&s.from),
+                to_name: name_field(&s.to),
+                start: s.start,
+                duration: s.duration,
+                progress: s.progress,
+                phase: match s.phase {
+                    crate::weather::TransitionPhase::Scheduled => NIMBUS_TRANSITION_SCHEDULED,
+                    crate::weather::TransitionPhase::Running => NIMBUS_TRANSITION_RUNNING,
+                    crate::weather::TransitionPhase::Done => NIMBUS_TRANSITION_DONE,
+                },
+            };
+            Ok(NIMBUS_OK)
+        })
+    }
+}
+
+/// Stops the weather where it is at host time `now`: a running transition freezes at its
+/// current blend, a scheduled one (starting after `now`) is dropped, and the sky holds until
+/// the next weather request (which must not be earlier than `now`).
+///
+/// Safety: `ctx` must be NULL or a live context.
+#[no_mangle]
+pub unsafe extern "C" fn nimbus_context_cancel_weather(
+    ctx: *mut NimbusContext,
+    now: f64,
+) -> NimbusResult {
+    // SAFETY: the caller guarantees a live context or NULL.
+    unsafe {
+        with_ctx(ctx, |inner| {
+            inner.renderer.cancel_weather(now)?;
+            Ok(NIMBUS_OK)
+        })
+    }
+}
+
 /// Drops the accumulated cloud history, so the next frame starts afresh. Call it on camera
 /// cuts (a teleport, a switch to another camera); ordinary and fast motion need no call.
 ///
-/// # Safety
-/// `ctx` must be NULL or a live context.
+/// Safety: `ctx` must be NULL or a live context.
 #[no_mangle]
-pub unsafe extern "C" fn nimbus_context_reset_history(ctx: *mut NimbusContext) -> i32 {
+pub unsafe extern "C" fn nimbus_context_reset_history(ctx: *mut NimbusContext) -> NimbusResult {
     // SAFETY: the caller guarantees a live context or NULL.
     unsafe {
         with_ctx(ctx, |inner| {
@@ -616,13 +901,32 @@ pub unsafe extern "C" fn nimbus_context_reset_history(ctx: *mut NimbusContext) -
     }
 }
 
-/// Deliberately panics inside the boundary: lets hosts check that a panic comes back as
-/// `NIMBUS_ERROR_PANIC` and poisons the context. Never call it in production.
+/// Test hook, only in builds with the `test-hooks` cargo feature (never in the release
+/// library, and not in nimbus.h): panics inside the boundary, so a C test can check that a
+/// panic comes back as NIMBUS_ERROR_PANIC and poisons the context.
 ///
-/// # Safety
-/// `ctx` must be NULL or a live context.
+/// Safety: `ctx` must be NULL or a live context.
+#[cfg(feature = "test-hooks")]
 #[no_mangle]
-pub unsafe extern "C" fn nimbus_context_debug_panic(ctx: *mut NimbusContext) -> i32 {
+pub unsafe extern "C" fn nimbus_test_hook_panic(ctx: *mut NimbusContext) -> NimbusResult {
     // SAFETY: the caller guarantees a live context or NULL.
-    unsafe { with_ctx(ctx, |_| panic!("nimbus_context_debug_panic was called")) }
+    unsafe { with_ctx(ctx, |_| panic!("nimbus_test_hook_panic was called")) }
+}
+
+/// Test hook, only with the `test-hooks` cargo feature (not in nimbus.h): destroys the
+/// context's GPU device, as a driver reset would lose it, so a C test can check that later
+/// calls return NIMBUS_ERROR_DEVICE_LOST and that a new context works afterwards.
+///
+/// Safety: `ctx` must be NULL or a live context.
+#[cfg(feature = "test-hooks")]
+#[no_mangle]
+pub unsafe extern "C" fn nimbus_test_hook_lose_device(ctx: *mut NimbusContext) -> NimbusResult {
+    // SAFETY: the caller guarantees a live context or NULL.
+    unsafe {
+        with_ctx(ctx, |inner| {
+            inner.device.destroy();
+            let _ = inner.device.poll(wgpu::PollType::wait_indefinitely());
+            Ok(NIMBUS_OK)
+        })
+    }
 }

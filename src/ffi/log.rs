@@ -4,7 +4,7 @@ use std::cell::Cell;
 use std::ffi::{c_char, c_void, CString};
 use std::sync::Mutex;
 
-use super::{boundary, FfiError, NIMBUS_OK};
+use super::{boundary, FfiError, NimbusResult, NIMBUS_OK};
 
 /// Receives one log message: `level` 1 error, 2 warning, 3 info, 4 debug, 5 trace. The message
 /// is valid only during the call. May be called from any thread that uses Nimbus.
@@ -75,7 +75,7 @@ pub extern "C" fn nimbus_set_log_callback(
     callback: NimbusLogCallback,
     user_data: *mut c_void,
     max_level: i32,
-) -> i32 {
+) -> NimbusResult {
     boundary(
         || {
             let filter = match max_level {

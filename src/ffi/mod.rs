@@ -8,8 +8,13 @@
 //!   returns `NIMBUS_ERROR_PANIC` and poisons the context.
 //! - Root structs carry `next` chains of `{s_type, next}` extension structs.
 
+// The header is C: each function's pointer contract is a plain "Safety:" paragraph there,
+// not a rustdoc "# Safety" section, which clippy would otherwise ask for.
+#![allow(clippy::missing_safety_doc)]
+
 mod context;
 mod log;
+mod result;
 mod texture;
 mod types;
 
@@ -20,6 +25,8 @@ use std::sync::Once;
 
 pub use context::*;
 pub use log::*;
+pub use result::NimbusResult::{self, *};
+pub use result::*;
 pub use texture::*;
 pub use types::*;
 
@@ -28,56 +35,26 @@ use crate::Error;
 /// Major version of the library; a context made with a header of another major version fails.
 pub const NIMBUS_VERSION_MAJOR: u32 = 0;
 /// Minor version.
-pub const NIMBUS_VERSION_MINOR: u32 = 1;
+pub const NIMBUS_VERSION_MINOR: u32 = 2;
 /// Patch version.
 pub const NIMBUS_VERSION_PATCH: u32 = 0;
+/// The oldest minor version of this major whose headers this library still serves.
+pub const NIMBUS_ABI_MIN_MINOR: u32 = 1;
 /// The ABI version this header describes: (major << 16) | minor. Pass it in
-/// `NimbusContextDesc::abi_version`.
+/// `NimbusContextDesc.abi_version`. A library accepts the same major with a minor from its
+/// NIMBUS_ABI_MIN_MINOR up to its own NIMBUS_VERSION_MINOR: older headers keep working, a
+/// newer header (which may use structs this library does not know) is refused, and so is 0.
 pub const NIMBUS_ABI_VERSION: u32 = (NIMBUS_VERSION_MAJOR << 16) | NIMBUS_VERSION_MINOR;
-
-/// Success.
-pub const NIMBUS_OK: i32 = 0;
-/// Positive status: the frame was not presented (window minimised, surface outdated or lost
-/// and reconfigured); render again next frame. Not an error.
-pub const NIMBUS_STATUS_FRAME_SKIPPED: i32 = 1;
-/// A required pointer argument was NULL.
-pub const NIMBUS_ERROR_NULL_POINTER: i32 = -1;
-/// An argument is out of range, NaN, or an unknown enum value or flag.
-pub const NIMBUS_ERROR_INVALID_ARGUMENT: i32 = -2;
-/// A chained struct has an unknown `s_type`.
-pub const NIMBUS_ERROR_UNKNOWN_STRUCT: i32 = -3;
-/// The header's ABI major version does not match the library's.
-pub const NIMBUS_ERROR_ABI_VERSION: i32 = -4;
-/// A setting is out of range.
-pub const NIMBUS_ERROR_INVALID_SETTINGS: i32 = -5;
-/// The camera, sun or time of a frame is unusable (NaN, non-invertible, mismatched flags).
-pub const NIMBUS_ERROR_INVALID_FRAME: i32 = -6;
-/// A texture or target has the wrong size, format or role, or a data size does not match.
-pub const NIMBUS_ERROR_INVALID_TARGET: i32 = -7;
-/// No GPU adapter was found (install Mesa's software Vulkan on machines without a GPU).
-pub const NIMBUS_ERROR_NO_ADAPTER: i32 = -8;
-/// The GPU device could not be created, or reported a validation / out-of-memory error.
-pub const NIMBUS_ERROR_GPU: i32 = -9;
-/// A preset file is missing or malformed (the message names the line and field).
-pub const NIMBUS_ERROR_PRESET_FILE: i32 = -10;
-/// A weather request is unusable (bad duration, earlier than the running transition).
-pub const NIMBUS_ERROR_WEATHER: i32 = -11;
-/// The window surface could not be created or configured.
-pub const NIMBUS_ERROR_SURFACE: i32 = -12;
-/// A panic inside Nimbus was caught; the context is now poisoned.
-pub const NIMBUS_ERROR_PANIC: i32 = -100;
-/// The context was poisoned by an earlier panic; only `nimbus_context_destroy` remains.
-pub const NIMBUS_ERROR_POISONED: i32 = -101;
 
 /// An error on its way to C: a result code and a message.
 #[derive(Debug)]
 pub(crate) struct FfiError {
-    pub code: i32,
+    pub code: NimbusResult,
     pub message: String,
 }
 
 impl FfiError {
-    pub(crate) fn new(code: i32, message: impl Into<String>) -> Self {
+    pub(crate) fn new(code: NimbusResult, message: impl Into<String>) -> Self {
         Self {
             code,
             message: message.into(),
@@ -105,8 +82,13 @@ impl From<Error> for FfiError {
             Error::InvalidWeather(_) => NIMBUS_ERROR_WEATHER,
             Error::Surface(_) => NIMBUS_ERROR_SURFACE,
             Error::Image(_) => NIMBUS_ERROR_INVALID_ARGUMENT,
+            Error::DeviceLost(_) => NIMBUS_ERROR_DEVICE_LOST,
         };
-        Self::new(code, e.to_string())
+        let mut message = e.to_string();
+        if code == NIMBUS_ERROR_DEVICE_LOST {
+            message.push_str(": destroy this context and create a new one");
+        }
+        Self::new(code, message)
     }
 }
 
@@ -167,9 +149,9 @@ fn install_panic_hook() {
 /// go to the thread's last error (and `on_error`, which contexts use to keep their own). A
 /// success empties the thread's last error.
 pub(crate) fn boundary(
-    f: impl FnOnce() -> FfiResult<i32>,
+    f: impl FnOnce() -> FfiResult<NimbusResult>,
     on_error: impl FnOnce(&str, bool),
-) -> i32 {
+) -> NimbusResult {
     install_panic_hook();
     BOUNDARY_DEPTH.with(|d| d.set(d.get() + 1));
     let result = catch_unwind(AssertUnwindSafe(f));
@@ -195,8 +177,7 @@ pub(crate) fn boundary(
 
 /// Reads a C string argument.
 ///
-/// # Safety
-/// `p` must be NULL or point to a NUL-terminated string.
+/// Safety: `p` must be NULL or point to a NUL-terminated string.
 pub(crate) unsafe fn c_str<'a>(p: *const c_char, name: &str) -> FfiResult<&'a str> {
     if p.is_null() {
         return Err(FfiError::null(name));

@@ -5,12 +5,14 @@ use std::ffi::c_void;
 use std::sync::{Arc, Weak};
 
 use super::context::{with_ctx, NimbusContext};
-use super::{boundary, check_chain, FfiError, FfiResult, NimbusTextureDesc, NIMBUS_OK};
+use super::{
+    boundary, check_chain, FfiError, FfiResult, NimbusResult, NimbusTextureDesc, NIMBUS_OK,
+};
 use super::{
     NIMBUS_ERROR_INVALID_TARGET, NIMBUS_FORMAT_R32_FLOAT, NIMBUS_FORMAT_RGBA16_FLOAT,
     NIMBUS_FORMAT_RGBA32_FLOAT, NIMBUS_FORMAT_RGBA8_UNORM, NIMBUS_FORMAT_RGBA8_UNORM_SRGB,
 };
-use crate::gpu::readback::read_texture;
+use crate::device::{gpu_scope, read_texture, texture_2d};
 use crate::headless::MAX_HEADLESS_SIZE;
 
 /// An opaque texture handle (see `nimbus_texture_create`).
@@ -20,6 +22,8 @@ pub struct NimbusTexture {
     device: wgpu::Device,
     queue: wgpu::Queue,
     bytes_per_pixel: u32,
+    /// Its `NIMBUS_FORMAT_*` value.
+    pub(crate) format: u32,
     /// The context that made it: only that one may use it.
     context_id: u64,
     /// Alive while that context is.
@@ -34,14 +38,17 @@ fn format_of(format: u32) -> FfiResult<(wgpu::TextureFormat, u32)> {
         NIMBUS_FORMAT_RGBA16_FLOAT => (F::Rgba16Float, 8),
         NIMBUS_FORMAT_RGBA32_FLOAT => (F::Rgba32Float, 16),
         NIMBUS_FORMAT_R32_FLOAT => (F::R32Float, 4),
-        _ => return Err(FfiError::arg(format!("unknown texture format {format}"))),
+        _ => {
+            return Err(FfiError::arg(format!(
+                "unknown texture format {format} (valid: NIMBUS_FORMAT_* 1..=5)"
+            )))
+        }
     })
 }
 
 /// The texture behind `tex`, once `data` is non-NULL and `size` is the texture's byte size.
 ///
-/// # Safety
-/// `tex` must be NULL or a live texture.
+/// Safety: `tex` must be NULL or a live texture.
 unsafe fn checked<'a>(
     tex: *const NimbusTexture,
     data_is_null: bool,
@@ -57,7 +64,24 @@ unsafe fn checked<'a>(
     Ok(tex)
 }
 
+/// The header's name of a `NIMBUS_FORMAT_*` value.
+pub(crate) fn format_name(format: u32) -> &'static str {
+    match format {
+        NIMBUS_FORMAT_RGBA8_UNORM => "NIMBUS_FORMAT_RGBA8_UNORM",
+        NIMBUS_FORMAT_RGBA8_UNORM_SRGB => "NIMBUS_FORMAT_RGBA8_UNORM_SRGB",
+        NIMBUS_FORMAT_RGBA16_FLOAT => "NIMBUS_FORMAT_RGBA16_FLOAT",
+        NIMBUS_FORMAT_RGBA32_FLOAT => "NIMBUS_FORMAT_RGBA32_FLOAT",
+        NIMBUS_FORMAT_R32_FLOAT => "NIMBUS_FORMAT_R32_FLOAT",
+        _ => "an unknown format",
+    }
+}
+
 impl NimbusTexture {
+    /// Width and height in pixels.
+    pub(crate) fn size(&self) -> (u32, u32) {
+        (self.texture.width(), self.texture.height())
+    }
+
     /// Refuses a texture whose context is gone: it may then only be destroyed.
     fn check_alive(&self) -> FfiResult {
         if self.context.strong_count() == 0 {
@@ -107,14 +131,13 @@ impl NimbusTexture {
 /// `NIMBUS_FORMAT_R32_FLOAT` holds scene depth. Contents start zeroed. `*out` is written only
 /// on success; free it with `nimbus_texture_destroy`.
 ///
-/// # Safety
-/// `ctx`, `desc` and `out` must be NULL or valid pointers.
+/// Safety: `ctx`, `desc` and `out` must be NULL or valid pointers.
 #[no_mangle]
 pub unsafe extern "C" fn nimbus_texture_create(
     ctx: *mut NimbusContext,
     desc: *const NimbusTextureDesc,
     out: *mut *mut NimbusTexture,
-) -> i32 {
+) -> NimbusResult {
     // SAFETY: pointers are checked before use; the caller guarantees validity otherwise.
     unsafe {
         with_ctx(ctx, |inner| {
@@ -137,8 +160,8 @@ pub unsafe extern "C" fn nimbus_texture_create(
                 usage |= U::RENDER_ATTACHMENT;
             }
             let device = inner.device.clone();
-            let texture = crate::renderer::gpu_scope(&device, || {
-                crate::gpu::texture_2d(
+            let texture = gpu_scope(&device, || {
+                texture_2d(
                     &device,
                     "nimbus host texture",
                     (desc.width, desc.height),
@@ -152,6 +175,7 @@ pub unsafe extern "C" fn nimbus_texture_create(
                 device,
                 queue: inner.queue.clone(),
                 bytes_per_pixel,
+                format: desc.format,
                 context_id: inner.id,
                 context: Arc::downgrade(&inner.alive),
             };
@@ -164,14 +188,13 @@ pub unsafe extern "C" fn nimbus_texture_create(
 /// Replaces the whole texture's contents with `size` bytes: rows from the top, tightly packed
 /// (width × bytes per pixel each), channels in format order (floats little-endian).
 ///
-/// # Safety
-/// `tex` must be NULL or a live texture; `data` must be NULL or point to `size` readable bytes.
+/// Safety: `tex` must be NULL or a live texture; `data` must be NULL or point to `size` readable bytes.
 #[no_mangle]
 pub unsafe extern "C" fn nimbus_texture_write(
     tex: *mut NimbusTexture,
     data: *const c_void,
     size: usize,
-) -> i32 {
+) -> NimbusResult {
     boundary(
         || {
             // SAFETY: `tex` is NULL or live per the caller's contract.
@@ -202,14 +225,13 @@ pub unsafe extern "C" fn nimbus_texture_write(
 /// Waits for the GPU and copies the texture into `data` (`size` bytes, layout as for
 /// `nimbus_texture_write`).
 ///
-/// # Safety
-/// `tex` must be NULL or a live texture; `data` must be NULL or point to `size` writable bytes.
+/// Safety: `tex` must be NULL or a live texture; `data` must be NULL or point to `size` writable bytes.
 #[no_mangle]
 pub unsafe extern "C" fn nimbus_texture_read(
     tex: *const NimbusTexture,
     data: *mut c_void,
     size: usize,
-) -> i32 {
+) -> NimbusResult {
     boundary(
         || {
             // SAFETY: `tex` is NULL or live per the caller's contract.
@@ -225,13 +247,12 @@ pub unsafe extern "C" fn nimbus_texture_read(
 
 /// Writes the number of bytes the texture holds (width × height × bytes per pixel) to `*out`.
 ///
-/// # Safety
-/// `tex` must be NULL or a live texture; `out` NULL or writable.
+/// Safety: `tex` must be NULL or a live texture; `out` NULL or writable.
 #[no_mangle]
 pub unsafe extern "C" fn nimbus_texture_byte_size(
     tex: *const NimbusTexture,
     out: *mut usize,
-) -> i32 {
+) -> NimbusResult {
     boundary(
         || {
             // SAFETY: checked for NULL; the caller guarantees validity.
@@ -250,14 +271,17 @@ pub unsafe extern "C" fn nimbus_texture_byte_size(
 
 /// Frees a texture. NULL is a no-op. The texture must not be in use by a running call.
 ///
-/// # Safety
-/// `tex` must be NULL or a texture from `nimbus_texture_create`, not yet destroyed.
+/// Safety: `tex` must be NULL or a texture from `nimbus_texture_create`, not yet destroyed.
 #[no_mangle]
 pub unsafe extern "C" fn nimbus_texture_destroy(tex: *mut NimbusTexture) {
     if !tex.is_null() {
-        let _ = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-            // SAFETY: created by Box::into_raw in nimbus_texture_create, destroyed once.
-            drop(unsafe { Box::from_raw(tex) });
-        }));
+        boundary(
+            || {
+                // SAFETY: created by Box::into_raw in nimbus_texture_create, destroyed once.
+                drop(unsafe { Box::from_raw(tex) });
+                Ok(NIMBUS_OK)
+            },
+            |_, _| {},
+        );
     }
 }

@@ -13,10 +13,12 @@ pub struct NimbusChainedStruct {
     pub next: *const NimbusChainedStruct,
 }
 
-/// `s_type` of [`NimbusSettingsExt`] (chain it to `NimbusContextDesc::next`).
+/// `s_type` of `NimbusSettingsExt` (chain it to `NimbusContextDesc.next`).
 pub const NIMBUS_STYPE_SETTINGS: u32 = 1;
+/// `s_type` of `NimbusQualityExt` (chain it to `NimbusContextDesc.next`). Since ABI 0.2.
+pub const NIMBUS_STYPE_QUALITY: u32 = 2;
 
-/// Window platforms for [`NimbusWindowHandle::platform`].
+/// Window platforms for `NimbusWindowHandle.platform`.
 pub const NIMBUS_PLATFORM_X11: u32 = 1;
 /// Wayland: `display` is the `wl_display*`, `surface` the `wl_surface*`.
 pub const NIMBUS_PLATFORM_WAYLAND: u32 = 2;
@@ -43,7 +45,7 @@ pub struct NimbusWindowHandle {
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct NimbusContextDesc {
-    /// Chained extensions (e.g. [`NimbusSettingsExt`]), or NULL.
+    /// Chained extensions (e.g. `NimbusSettingsExt`), or NULL.
     pub next: *const NimbusChainedStruct,
     /// Must be `NIMBUS_ABI_VERSION` of the header you compiled against.
     pub abi_version: u32,
@@ -55,7 +57,7 @@ pub struct NimbusContextDesc {
     pub window: *const NimbusWindowHandle,
 }
 
-/// Preset ids for `nimbus_context_set_weather` and `NimbusSettingsExt::initial_preset`.
+/// Preset ids for `nimbus_context_set_weather` and `NimbusSettingsExt.initial_preset`.
 pub const NIMBUS_PRESET_CLEAR: u32 = 1;
 /// Fair-weather cumulus (the default).
 pub const NIMBUS_PRESET_SPARSE: u32 = 2;
@@ -109,15 +111,65 @@ pub struct NimbusSettingsExt {
     pub max_distance: f32,
     /// Planet radius, meters. 0: 6 360 000.
     pub planet_radius: f32,
-    /// A `NIMBUS_QUALITY_*` level, applied before the march fields above refine it.
-    /// 0: medium.
+}
+
+/// Quality extension (`s_type = NIMBUS_STYPE_QUALITY`), since ABI 0.2. The level is applied
+/// first; the march fields of a `NimbusSettingsExt` in the same chain refine it.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct NimbusQualityExt {
+    /// Chain header.
+    pub chain: NimbusChainedStruct,
+    /// A `NIMBUS_QUALITY_*` level. 0: medium.
     pub quality: u32,
+}
+
+/// `NimbusWeatherState.phase`: the transition starts later.
+pub const NIMBUS_TRANSITION_SCHEDULED: u32 = 1;
+/// `NimbusWeatherState.phase`: the transition is under way.
+pub const NIMBUS_TRANSITION_RUNNING: u32 = 2;
+/// `NimbusWeatherState.phase`: the transition has finished (or was instant, or the sky is
+/// held after nimbus_context_cancel_weather).
+pub const NIMBUS_TRANSITION_DONE: u32 = 3;
+
+/// Largest preset (file or text) accepted, in bytes.
+pub const NIMBUS_MAX_PRESET_BYTES: usize = 65536;
+
+/// Longest weather name `NimbusWeatherState` carries, NUL included; longer names are cut.
+pub const NIMBUS_WEATHER_NAME_CAPACITY: usize = 32;
+
+/// The weather transition as seen at one time (nimbus_context_weather_state), since ABI 0.2.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct NimbusWeatherState {
+    /// Chained extensions, or NULL.
+    pub next: *const NimbusChainedStruct,
+    /// Name of the weather the transition starts from, NUL-terminated (a frozen blend keeps
+    /// the name of its nearer end).
+    pub from_name: [std::ffi::c_char; NIMBUS_WEATHER_NAME_CAPACITY],
+    /// Name of the weather it heads to, NUL-terminated.
+    pub to_name: [std::ffi::c_char; NIMBUS_WEATHER_NAME_CAPACITY],
+    /// Host time the transition starts at, seconds.
+    pub start: f64,
+    /// Its length in seconds (0: instant, or a held sky).
+    pub duration: f64,
+    /// Blend weight in [0, 1] at the queried time.
+    pub progress: f32,
+    /// A `NIMBUS_TRANSITION_*` value.
+    pub phase: u32,
 }
 
 /// Depth flag: the projection is reversed-Z (near at depth 1).
 pub const NIMBUS_DEPTH_REVERSED_Z: u32 = 1;
 /// Depth flag: the projection has no far plane.
 pub const NIMBUS_DEPTH_INFINITE_FAR: u32 = 2;
+/// Depth flag (since ABI 0.2): the projection is OpenGL-style, clip z in [-w, w], and the
+/// depth buffer holds OpenGL's window depth (z / w + 1) / 2. A matrix cannot tell the two
+/// conventions apart (every OpenGL projection is also a valid [0, 1] projection with other near
+/// and far planes), so without this flag an OpenGL matrix is read as a [0, 1] one and its
+/// depth buffer misread: set it whenever the projection comes from an OpenGL-style helper
+/// (glm::perspective without GLM_FORCE_DEPTH_ZERO_TO_ONE, glFrustum, ...).
+pub const NIMBUS_DEPTH_GL_CLIP_Z: u32 = 4;
 
 /// One frame's inputs. Matrices are column-major, right-handed, meters; clip depth in [0, 1].
 #[repr(C)]
@@ -141,7 +193,7 @@ pub struct NimbusFrame {
     pub time: f64,
 }
 
-/// Texture formats for [`NimbusTextureDesc::format`].
+/// Texture formats for `NimbusTextureDesc.format`.
 pub const NIMBUS_FORMAT_RGBA8_UNORM: u32 = 1;
 /// 8-bit sRGB-encoded color (stored encoded, read and written as linear by Nimbus).
 pub const NIMBUS_FORMAT_RGBA8_UNORM_SRGB: u32 = 2;
@@ -196,5 +248,150 @@ mod tests {
         assert_eq!(size_of::<NimbusFrame>(), 176);
         assert_eq!(size_of::<NimbusTextureDesc>(), 24);
         assert_eq!(size_of::<NimbusTargets>(), 32);
+        assert_eq!(size_of::<NimbusQualityExt>(), 24);
+        assert_eq!(size_of::<NimbusWeatherState>(), 96);
+    }
+
+    #[test]
+    fn preset_limit_matches_the_rust_one() {
+        assert_eq!(
+            NIMBUS_MAX_PRESET_BYTES,
+            crate::weather::preset::MAX_PRESET_BYTES
+        );
+    }
+
+    /// Every field's offset, as released; the C test pins the same from the header's side.
+    #[test]
+    fn released_field_offsets_are_pinned() {
+        use std::mem::offset_of;
+        let pins: &[(&str, usize, usize)] = &[
+            ("chain.s_type", offset_of!(NimbusChainedStruct, s_type), 0),
+            ("chain.next", offset_of!(NimbusChainedStruct, next), 8),
+            (
+                "window.platform",
+                offset_of!(NimbusWindowHandle, platform),
+                0,
+            ),
+            ("window.display", offset_of!(NimbusWindowHandle, display), 8),
+            ("window.window", offset_of!(NimbusWindowHandle, window), 16),
+            (
+                "window.surface",
+                offset_of!(NimbusWindowHandle, surface),
+                24,
+            ),
+            ("desc.next", offset_of!(NimbusContextDesc, next), 0),
+            (
+                "desc.abi_version",
+                offset_of!(NimbusContextDesc, abi_version),
+                8,
+            ),
+            ("desc.width", offset_of!(NimbusContextDesc, width), 12),
+            ("desc.height", offset_of!(NimbusContextDesc, height), 16),
+            ("desc.window", offset_of!(NimbusContextDesc, window), 24),
+            ("settings.chain", offset_of!(NimbusSettingsExt, chain), 0),
+            (
+                "settings.initial_preset",
+                offset_of!(NimbusSettingsExt, initial_preset),
+                16,
+            ),
+            (
+                "settings.noise_seed",
+                offset_of!(NimbusSettingsExt, noise_seed),
+                20,
+            ),
+            (
+                "settings.march_max_steps",
+                offset_of!(NimbusSettingsExt, march_max_steps),
+                24,
+            ),
+            (
+                "settings.march_min_steps",
+                offset_of!(NimbusSettingsExt, march_min_steps),
+                28,
+            ),
+            ("settings.jitter", offset_of!(NimbusSettingsExt, jitter), 32),
+            (
+                "settings.max_distance",
+                offset_of!(NimbusSettingsExt, max_distance),
+                36,
+            ),
+            (
+                "settings.planet_radius",
+                offset_of!(NimbusSettingsExt, planet_radius),
+                40,
+            ),
+            ("quality.chain", offset_of!(NimbusQualityExt, chain), 0),
+            ("quality.quality", offset_of!(NimbusQualityExt, quality), 16),
+            ("frame.next", offset_of!(NimbusFrame, next), 0),
+            ("frame.view", offset_of!(NimbusFrame, view), 8),
+            ("frame.projection", offset_of!(NimbusFrame, projection), 72),
+            (
+                "frame.depth_flags",
+                offset_of!(NimbusFrame, depth_flags),
+                136,
+            ),
+            (
+                "frame.sun_direction",
+                offset_of!(NimbusFrame, sun_direction),
+                140,
+            ),
+            ("frame.sun_color", offset_of!(NimbusFrame, sun_color), 152),
+            (
+                "frame.sun_illuminance",
+                offset_of!(NimbusFrame, sun_illuminance),
+                164,
+            ),
+            ("frame.time", offset_of!(NimbusFrame, time), 168),
+            ("texture_desc.next", offset_of!(NimbusTextureDesc, next), 0),
+            (
+                "texture_desc.width",
+                offset_of!(NimbusTextureDesc, width),
+                8,
+            ),
+            (
+                "texture_desc.height",
+                offset_of!(NimbusTextureDesc, height),
+                12,
+            ),
+            (
+                "texture_desc.format",
+                offset_of!(NimbusTextureDesc, format),
+                16,
+            ),
+            ("targets.next", offset_of!(NimbusTargets, next), 0),
+            (
+                "targets.scene_color",
+                offset_of!(NimbusTargets, scene_color),
+                8,
+            ),
+            (
+                "targets.scene_depth",
+                offset_of!(NimbusTargets, scene_depth),
+                16,
+            ),
+            ("targets.output", offset_of!(NimbusTargets, output), 24),
+            ("state.next", offset_of!(NimbusWeatherState, next), 0),
+            (
+                "state.from_name",
+                offset_of!(NimbusWeatherState, from_name),
+                8,
+            ),
+            ("state.to_name", offset_of!(NimbusWeatherState, to_name), 40),
+            ("state.start", offset_of!(NimbusWeatherState, start), 72),
+            (
+                "state.duration",
+                offset_of!(NimbusWeatherState, duration),
+                80,
+            ),
+            (
+                "state.progress",
+                offset_of!(NimbusWeatherState, progress),
+                88,
+            ),
+            ("state.phase", offset_of!(NimbusWeatherState, phase), 92),
+        ];
+        for (name, got, want) in pins {
+            assert_eq!(got, want, "offset of {name}");
+        }
     }
 }

@@ -66,7 +66,7 @@ pub(crate) fn dispatch(
     pass.dispatch_workgroups(groups[0], groups[1], groups[2]);
 }
 
-/// A 2D RGBA8 texture usable as storage, sampled texture and copy source.
+/// A 2D RGBA8 texture usable as storage, sampled texture, copy source and destination.
 pub(crate) fn map_texture(device: &wgpu::Device, label: &str, size: u32) -> wgpu::Texture {
     use wgpu::TextureUsages as U;
     super::texture_2d(
@@ -74,7 +74,7 @@ pub(crate) fn map_texture(device: &wgpu::Device, label: &str, size: u32) -> wgpu
         label,
         (size, size),
         wgpu::TextureFormat::Rgba8Unorm,
-        U::TEXTURE_BINDING | U::STORAGE_BINDING | U::COPY_SRC,
+        U::TEXTURE_BINDING | U::STORAGE_BINDING | U::COPY_SRC | U::COPY_DST,
     )
 }
 

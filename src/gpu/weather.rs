@@ -143,23 +143,7 @@ impl WeatherMaps {
             MapAction::KeepFrom => (self.from, self.to),
             MapAction::ToBecomesFrom => (self.to, self.from),
             MapAction::Bake(weight) => {
-                let params = BlendParams {
-                    weight,
-                    size: self.size,
-                    _pad: [0; 2],
-                };
-                dispatch(
-                    device,
-                    &mut encoder,
-                    &self.blend,
-                    Some(bytemuck::bytes_of(&params)),
-                    &[
-                        (1, &self.views[self.from]),
-                        (2, &self.views[self.to]),
-                        (3, &self.views[spare]),
-                    ],
-                    self.groups(),
-                );
+                self.record_blend(device, &mut encoder, weight, spare);
                 // The frozen blend is the new start; the old start's texture is free.
                 (spare, self.from)
             }
@@ -167,6 +151,70 @@ impl WeatherMaps {
         self.generate(device, &mut encoder, slots.1, target);
         queue.submit([encoder.finish()]);
         slots
+    }
+
+    /// Records and submits a hold (see `Timeline::hold`): `action` settles the `from` map as
+    /// for a request, and the `to` slot receives a copy of it, since the held sky is that map
+    /// (a frozen blend cannot be regenerated from parameters). Returns the new slots for
+    /// `commit`; nothing changes until then.
+    pub fn hold(
+        &self,
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        action: MapAction,
+    ) -> (usize, usize) {
+        let spare = 3 - self.from - self.to;
+        let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+            label: Some("nimbus weather hold"),
+        });
+        let from = match action {
+            MapAction::KeepFrom => self.from,
+            MapAction::ToBecomesFrom => self.to,
+            MapAction::Bake(weight) => {
+                self.record_blend(device, &mut encoder, weight, spare);
+                spare
+            }
+        };
+        // Any slot but `from` takes the copy.
+        let to = if from == self.to { self.from } else { self.to };
+        let size = wgpu::Extent3d {
+            width: self.size,
+            height: self.size,
+            depth_or_array_layers: 1,
+        };
+        encoder.copy_texture_to_texture(
+            self.textures[from].as_image_copy(),
+            self.textures[to].as_image_copy(),
+            size,
+        );
+        queue.submit([encoder.finish()]);
+        (from, to)
+    }
+
+    fn record_blend(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        weight: f32,
+        into: usize,
+    ) {
+        let params = BlendParams {
+            weight,
+            size: self.size,
+            _pad: [0; 2],
+        };
+        dispatch(
+            device,
+            encoder,
+            &self.blend,
+            Some(bytemuck::bytes_of(&params)),
+            &[
+                (1, &self.views[self.from]),
+                (2, &self.views[self.to]),
+                (3, &self.views[into]),
+            ],
+            self.groups(),
+        );
     }
 
     /// Makes `slots` (from `apply`) the current (from, to) maps.

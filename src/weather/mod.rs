@@ -8,4 +8,6 @@ pub mod transition;
 pub use preset::{
     CloudLayer, CloudShape, HighLayer, HorizonGradient, MapLayer, Preset, Weather, WeatherMap, Wind,
 };
-pub use transition::{MapAction, Timeline, WeatherSample, WindOffsets};
+pub use transition::{
+    MapAction, Timeline, TransitionPhase, TransitionState, WeatherSample, WindOffsets,
+};

@@ -552,13 +552,38 @@ impl Weather {
     /// Parses and validates a TOML document. `origin` names it in errors (a path, or
     /// `<string>`). Missing fields take the `sparse` preset's values.
     pub fn from_toml(text: &str, origin: &str) -> Result<Weather> {
+        let file_error = |message: String| Error::PresetFile {
+            origin: origin.to_string(),
+            line: None,
+            field: None,
+            message,
+        };
+        if text.len() > MAX_PRESET_BYTES {
+            return Err(file_error(format!(
+                "is {} bytes; a preset is at most {MAX_PRESET_BYTES} bytes",
+                text.len()
+            )));
+        }
+        // An empty (or comment-only) file would silently be the sparse preset: say so instead.
+        let has_content = text.lines().any(|l| {
+            let l = l.trim();
+            !l.is_empty() && !l.starts_with('#')
+        });
+        if !has_content {
+            return Err(file_error(
+                "holds no settings (empty or only comments); a preset file sets at least one \
+                 field, missing ones take the sparse preset's values (write a built-in preset \
+                 out as a template to start from)"
+                    .into(),
+            ));
+        }
         let weather: Weather = toml::from_str(text).map_err(|e| {
             let line = e.span().map(|s| line_of(text, s.start));
             Error::PresetFile {
                 origin: origin.to_string(),
                 line,
                 field: line.and_then(|l| key_on_line(text, l)),
-                message: e.message().trim().to_string(),
+                message: plain_schema_words(e.message().trim()),
             }
         })?;
         weather.validate().map_err(|e| match e {
@@ -573,15 +598,29 @@ impl Weather {
         Ok(weather)
     }
 
-    /// Reads a preset file.
+    /// Reads a preset file (at most [`MAX_PRESET_BYTES`]; a larger file, or a device such as
+    /// `/dev/zero`, is refused without reading it all).
     pub fn load(path: &Path) -> Result<Weather> {
+        use std::io::Read;
         let origin = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| Error::PresetFile {
+        let file_error = |message: String| Error::PresetFile {
             origin: origin.clone(),
             line: None,
             field: None,
-            message: e.to_string(),
-        })?;
+            message,
+        };
+        let file = std::fs::File::open(path).map_err(|e| file_error(e.to_string()))?;
+        let mut bytes = Vec::new();
+        file.take(MAX_PRESET_BYTES as u64 + 1)
+            .read_to_end(&mut bytes)
+            .map_err(|e| file_error(e.to_string()))?;
+        if bytes.len() > MAX_PRESET_BYTES {
+            return Err(file_error(format!(
+                "is larger than {MAX_PRESET_BYTES} bytes, the most a preset may hold"
+            )));
+        }
+        let text = String::from_utf8(bytes)
+            .map_err(|_| file_error("is not UTF-8 text (a preset is a TOML file)".into()))?;
         Weather::from_toml(&text, &origin)
     }
 
@@ -595,6 +634,29 @@ impl Weather {
             message: e.to_string(),
         })
     }
+}
+
+/// Largest preset accepted, in bytes: a preset is a few hundred bytes; this bounds what a
+/// wrong path (a log file, `/dev/zero`) can make Nimbus read.
+pub const MAX_PRESET_BYTES: usize = 64 * 1024;
+
+/// The TOML parser names the Rust types it fills ("expected struct CloudLayer"); a preset's
+/// author knows tables and arrays.
+fn plain_schema_words(message: &str) -> String {
+    let mut out = String::with_capacity(message.len());
+    let mut rest = message;
+    while let Some(at) = rest.find("struct ") {
+        out.push_str(&rest[..at]);
+        let after = &rest[at + "struct ".len()..];
+        let name_len = after
+            .find(|c: char| !c.is_alphanumeric() && c != '_')
+            .unwrap_or(after.len());
+        out.push_str("a table");
+        rest = &after[name_len..];
+    }
+    out.push_str(rest);
+    out.replace("a sequence", "an array")
+        .replace("a map", "a table")
 }
 
 /// The nearer end of a blend, for fields that cannot be interpolated.
@@ -684,6 +746,39 @@ mod tests {
             })
             .validate()
             .unwrap();
+    }
+
+    #[test]
+    fn empty_huge_and_endless_files_are_refused_with_a_reason() {
+        for text in ["", "\n\n", "# just a comment\n  # another\n"] {
+            let e = Weather::from_toml(text, "<string>")
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("holds no settings"), "{e}");
+        }
+        let huge = format!("name = \"x\"\n{}", "# padding\n".repeat(10_000));
+        let e = Weather::from_toml(&huge, "<string>")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("at most"), "{e}");
+        // /dev/zero would be read until memory runs out without the limit.
+        if Path::new("/dev/zero").exists() {
+            let e = Weather::load(Path::new("/dev/zero"))
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains("larger than"), "{e}");
+        }
+    }
+
+    #[test]
+    fn parse_errors_speak_of_tables_not_rust_structs() {
+        let e = Weather::from_toml("[clouds]\ncoverage = 0.5\n[[map.layers]]\n", "<string>");
+        let text = format!("{e:?}");
+        let e = Weather::from_toml("clouds = 3\n", "<string>")
+            .unwrap_err()
+            .to_string();
+        assert!(!e.contains("struct"), "{e} / {text}");
+        assert!(e.contains("table"), "{e}");
     }
 
     #[test]

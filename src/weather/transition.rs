@@ -48,6 +48,35 @@ pub enum MapAction {
     Bake(f32),
 }
 
+/// Where the weather stands at a given time.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TransitionState {
+    /// Name of the weather the transition starts from (a frozen blend keeps the name of the
+    /// nearer end).
+    pub from: String,
+    /// Name of the weather it heads to.
+    pub to: String,
+    /// Host time it starts at (s).
+    pub start: f64,
+    /// Its length (s); 0 for an instant change or a held sky.
+    pub duration: f64,
+    /// Blend weight in [0, 1] (smoothstep of the elapsed fraction).
+    pub progress: f32,
+    /// Scheduled (not begun), running, or done.
+    pub phase: TransitionPhase,
+}
+
+/// The phase of the transition at a given time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TransitionPhase {
+    /// It starts later.
+    Scheduled,
+    /// It is under way.
+    Running,
+    /// It has finished (or was instant): the sky holds its target.
+    Done,
+}
+
 /// The transition state machine.
 #[derive(Clone, Debug)]
 pub struct Timeline {
@@ -143,17 +172,70 @@ impl Timeline {
         &self.to
     }
 
+    /// The transition as seen at time `t`.
+    pub fn state(&self, t: f64) -> TransitionState {
+        let phase = if t < self.start {
+            TransitionPhase::Scheduled
+        } else if t < self.start + self.duration {
+            TransitionPhase::Running
+        } else {
+            TransitionPhase::Done
+        };
+        TransitionState {
+            from: self.from.name.clone(),
+            to: self.to.name.clone(),
+            start: self.start,
+            duration: self.duration,
+            progress: self.weight(t),
+            phase,
+        }
+    }
+
+    /// Stops the weather where it is at time `now`: a running transition is frozen at its
+    /// current blend, a scheduled one (starting after `now`) is dropped, and the sky holds
+    /// from `now` on. Returns what must happen to the `from` map; the `to` map then becomes a
+    /// copy of it. `now` may precede a scheduled transition's start, but not an earlier
+    /// request's.
+    pub fn hold(&mut self, now: f64) -> Result<MapAction> {
+        if !now.is_finite() {
+            return Err(Error::InvalidWeather(format!(
+                "time must be finite, got {}",
+                crate::validate::num(now)
+            )));
+        }
+        let (action, held, offsets) = if now < self.start {
+            // Not begun: its starting weather is what the sky shows until then.
+            (MapAction::KeepFrom, self.from.clone(), self.offsets(now))
+        } else {
+            let sample = self.sample(now);
+            let action = match sample.map_weight {
+                w if w <= 0.0 => MapAction::KeepFrom,
+                w if w >= 1.0 => MapAction::ToBecomesFrom,
+                w => MapAction::Bake(w),
+            };
+            (action, sample.weather, sample.offsets)
+        };
+        self.from = held.clone();
+        self.to = held;
+        self.start = now;
+        self.duration = 0.0;
+        self.offsets_at_start = offsets;
+        Ok(action)
+    }
+
     /// Starts a transition to `target` at time `start` lasting `duration` seconds (0 = at
     /// once). Returns what must happen to the weather maps.
     pub fn request(&mut self, target: Weather, start: f64, duration: f64) -> Result<MapAction> {
         if !start.is_finite() {
             return Err(Error::InvalidWeather(format!(
-                "start time must be finite, got {start}"
+                "start time must be finite, got {}",
+                crate::validate::num(start)
             )));
         }
         if !(duration.is_finite() && duration >= 0.0) {
             return Err(Error::InvalidWeather(format!(
-                "duration must be finite and >= 0, got {duration}"
+                "duration must be finite and >= 0, got {}",
+                crate::validate::num(duration)
             )));
         }
         if start < self.start {
@@ -185,6 +267,48 @@ mod tests {
 
     fn close(a: f64, b: f64) -> bool {
         (a - b).abs() < 1e-6 * (1.0 + a.abs().max(b.abs()))
+    }
+
+    #[test]
+    fn state_reports_phase_and_progress() {
+        let mut t = Timeline::new(Weather::sparse(), 0.0);
+        t.request(Weather::stormy(), 10.0, 20.0).unwrap();
+        let s = t.state(5.0);
+        assert_eq!(
+            (s.phase, s.from.as_str(), s.to.as_str()),
+            (TransitionPhase::Scheduled, "sparse", "stormy")
+        );
+        let s = t.state(20.0);
+        assert_eq!(s.phase, TransitionPhase::Running);
+        assert!((s.progress - 0.5).abs() < 1e-6);
+        assert_eq!(t.state(31.0).phase, TransitionPhase::Done);
+    }
+
+    #[test]
+    fn hold_freezes_a_running_transition_without_a_jump() {
+        let mut t = Timeline::new(Weather::sparse(), 0.0);
+        t.request(Weather::stormy(), 10.0, 20.0).unwrap();
+        let before = t.sample(17.0);
+        let action = t.hold(17.0).unwrap();
+        assert!(matches!(action, MapAction::Bake(w) if (w - before.map_weight).abs() < 1e-6));
+        // From now on the sky is what it was at 17 s, for ever; the wind goes on continuously.
+        let after = t.sample(17.0);
+        assert_eq!(after.weather, before.weather);
+        assert!(close(after.offsets.base.x, before.offsets.base.x));
+        assert_eq!(t.sample(500.0).weather, before.weather);
+        assert_eq!(t.state(500.0).phase, TransitionPhase::Done);
+    }
+
+    #[test]
+    fn hold_drops_a_scheduled_transition() {
+        let mut t = Timeline::new(Weather::sparse(), 0.0);
+        t.request(Weather::stormy(), 100.0, 20.0).unwrap();
+        assert_eq!(t.hold(40.0).unwrap(), MapAction::KeepFrom);
+        assert_eq!(t.sample(200.0).weather, Weather::sparse());
+        assert!(t.hold(f64::NAN).is_err());
+        // Requests go on from the hold.
+        assert!(t.request(Weather::cloudy(), 30.0, 1.0).is_err());
+        t.request(Weather::cloudy(), 41.0, 1.0).unwrap();
     }
 
     #[test]

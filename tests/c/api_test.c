@@ -1,7 +1,11 @@
-/* C API tests: every kind of bad input gets its documented code and a message, and the context
- * stays usable. Built with -std=c99 -Wall -Wextra -Werror -pedantic and AddressSanitizer.
- * Ends with "N passed, N failed". */
+/* C API tests: every kind of bad input gets its documented code and a message in the
+ * documented place, successes leave the messages empty, and the context stays usable.
+ * Built with -std=c99 -Wall -Wextra -Werror -pedantic, under AddressSanitizer + UBSan and
+ * under valgrind. Needs a library built with the `test-hooks` feature (NIMBUS_TEST_HOOKS).
+ * Ends with "N passed, N failed" and the number of distinct bad-input cases. */
 #include <math.h>
+#include <pthread.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -9,39 +13,124 @@
 #include "nimbus.h"
 #include "camera.h"
 
-/* Struct layouts are part of the ABI: pin them (64-bit targets). */
-#define ASSERT_SIZE(type, size) typedef char assert_size_##type[(sizeof(type) == (size)) ? 1 : -1]
-ASSERT_SIZE(NimbusChainedStruct, 16);
-ASSERT_SIZE(NimbusWindowHandle, 32);
-ASSERT_SIZE(NimbusContextDesc, 32);
-ASSERT_SIZE(NimbusSettingsExt, 48);
-ASSERT_SIZE(NimbusFrame, 176);
-ASSERT_SIZE(NimbusTextureDesc, 24);
-ASSERT_SIZE(NimbusTargets, 32);
+#ifdef NIMBUS_TEST_HOOKS
+/* Test hooks: exported only by a library built with the `test-hooks` feature; not in nimbus.h. */
+NimbusResult nimbus_test_hook_panic(NimbusContext *ctx);
+NimbusResult nimbus_test_hook_lose_device(NimbusContext *ctx);
+#endif
 
-static int passed = 0, failed = 0;
+/* Struct layouts are part of the ABI: pin sizes and every field's offset (64-bit targets),
+ * the same numbers src/ffi/types.rs pins from the Rust side. */
+#define PIN(name, cond) typedef char pin_##name[(cond) ? 1 : -1]
+#define PIN_SIZE(type, size) PIN(size_##type, sizeof(type) == (size))
+#define PIN_OFFSET(type, field, off) PIN(off_##type##_##field, offsetof(type, field) == (off))
+PIN_SIZE(NimbusChainedStruct, 16);
+PIN_SIZE(NimbusWindowHandle, 32);
+PIN_SIZE(NimbusContextDesc, 32);
+PIN_SIZE(NimbusSettingsExt, 48);
+PIN_SIZE(NimbusQualityExt, 24);
+PIN_SIZE(NimbusFrame, 176);
+PIN_SIZE(NimbusTextureDesc, 24);
+PIN_SIZE(NimbusTargets, 32);
+PIN_SIZE(NimbusWeatherState, 96);
+PIN_OFFSET(NimbusWeatherState, next, 0);
+PIN_OFFSET(NimbusWeatherState, from_name, 8);
+PIN_OFFSET(NimbusWeatherState, to_name, 40);
+PIN_OFFSET(NimbusWeatherState, start, 72);
+PIN_OFFSET(NimbusWeatherState, duration, 80);
+PIN_OFFSET(NimbusWeatherState, progress, 88);
+PIN_OFFSET(NimbusWeatherState, phase, 92);
+PIN_OFFSET(NimbusChainedStruct, s_type, 0);
+PIN_OFFSET(NimbusChainedStruct, next, 8);
+PIN_OFFSET(NimbusWindowHandle, platform, 0);
+PIN_OFFSET(NimbusWindowHandle, display, 8);
+PIN_OFFSET(NimbusWindowHandle, window, 16);
+PIN_OFFSET(NimbusWindowHandle, surface, 24);
+PIN_OFFSET(NimbusContextDesc, next, 0);
+PIN_OFFSET(NimbusContextDesc, abi_version, 8);
+PIN_OFFSET(NimbusContextDesc, width, 12);
+PIN_OFFSET(NimbusContextDesc, height, 16);
+PIN_OFFSET(NimbusContextDesc, window, 24);
+PIN_OFFSET(NimbusSettingsExt, chain, 0);
+PIN_OFFSET(NimbusSettingsExt, initial_preset, 16);
+PIN_OFFSET(NimbusSettingsExt, noise_seed, 20);
+PIN_OFFSET(NimbusSettingsExt, march_max_steps, 24);
+PIN_OFFSET(NimbusSettingsExt, march_min_steps, 28);
+PIN_OFFSET(NimbusSettingsExt, jitter, 32);
+PIN_OFFSET(NimbusSettingsExt, max_distance, 36);
+PIN_OFFSET(NimbusSettingsExt, planet_radius, 40);
+PIN_OFFSET(NimbusQualityExt, chain, 0);
+PIN_OFFSET(NimbusQualityExt, quality, 16);
+PIN_OFFSET(NimbusFrame, next, 0);
+PIN_OFFSET(NimbusFrame, view, 8);
+PIN_OFFSET(NimbusFrame, projection, 72);
+PIN_OFFSET(NimbusFrame, depth_flags, 136);
+PIN_OFFSET(NimbusFrame, sun_direction, 140);
+PIN_OFFSET(NimbusFrame, sun_color, 152);
+PIN_OFFSET(NimbusFrame, sun_illuminance, 164);
+PIN_OFFSET(NimbusFrame, time, 168);
+PIN_OFFSET(NimbusTextureDesc, next, 0);
+PIN_OFFSET(NimbusTextureDesc, width, 8);
+PIN_OFFSET(NimbusTextureDesc, height, 12);
+PIN_OFFSET(NimbusTextureDesc, format, 16);
+PIN_OFFSET(NimbusTargets, next, 0);
+PIN_OFFSET(NimbusTargets, scene_color, 8);
+PIN_OFFSET(NimbusTargets, scene_depth, 16);
+PIN_OFFSET(NimbusTargets, output, 24);
+
+/* Result codes are enum constants: arithmetic on them compiles. */
+PIN(codes_are_constants, 0 - NIMBUS_ERROR_NULL_POINTER == 1);
+
+static int passed = 0, failed = 0, bad_cases = 0;
 static NimbusContext *ctx = NULL;
 
-static void expect(int32_t got, int32_t want, const char *what, int line) {
-    const char *msg = nimbus_context_last_error(ctx);
+static int empty(const char *s) { return s == NULL || s[0] == '\0'; }
+
+/* Checks a call's result and its messages: on failure the thread's message (last_error(NULL))
+ * and, when `on` is given, the context's message are set (and contain `needle` if given); on
+ * success both are empty. */
+static void check(int32_t got, int32_t want, NimbusContext *on, const char *needle,
+                  const char *what, int line) {
+    const char *thread_msg = nimbus_context_last_error(NULL);
+    const char *ctx_msg = on ? nimbus_context_last_error(on) : NULL;
     if (got != want) {
-        printf("FAIL line %d: %s returned %d, expected %d (%s)\n", line, what, got, want, msg);
+        printf("FAIL line %d: %s returned %s (%d), expected %s: %s\n", line, what,
+               nimbus_result_name(got), got, nimbus_result_name(want), thread_msg);
         failed++;
         return;
     }
-    if (want < 0 && (msg == NULL || msg[0] == '\0')) {
-        /* Calls without a context report on the thread's last error. */
-        msg = nimbus_context_last_error(NULL);
-        if (msg == NULL || msg[0] == '\0') {
-            printf("FAIL line %d: %s gave no message\n", line, what);
+    if (want < 0) {
+        bad_cases++;
+        if (empty(thread_msg) || (on && empty(ctx_msg))) {
+            printf("FAIL line %d: %s gave no message (thread: '%s', context: '%s')\n", line, what,
+                   thread_msg, ctx_msg ? ctx_msg : "-");
             failed++;
             return;
         }
+        if (on && strcmp(thread_msg, ctx_msg) != 0) {
+            printf("FAIL line %d: %s: thread and context messages differ\n", line, what);
+            failed++;
+            return;
+        }
+        if (needle && !strstr(thread_msg, needle)) {
+            printf("FAIL line %d: %s: message '%s' lacks '%s'\n", line, what, thread_msg, needle);
+            failed++;
+            return;
+        }
+        printf("ok   %-60s -> %-30s %s\n", what, nimbus_result_name(got), thread_msg);
+    } else if (!empty(thread_msg) || (on && !empty(ctx_msg))) {
+        printf("FAIL line %d: %s succeeded but a message remains: '%s'\n", line, what, thread_msg);
+        failed++;
+        return;
     }
-    if (want < 0) printf("ok   %-58s -> %4d: %s\n", what, got, msg);
     passed++;
 }
-#define EXPECT(call, code) expect((call), (code), #call, __LINE__)
+/* EXPECT: a call whose errors land on the thread only (no context, or a NULL one). */
+#define EXPECT(call, code) check((call), (code), NULL, NULL, #call, __LINE__)
+/* EXPECT_ON: a call on context `c`; its errors land on the thread and on `c`. */
+#define EXPECT_ON(c, call, code) check((call), (code), (c), NULL, #call, __LINE__)
+#define EXPECT_MSG(c, call, code, needle) check((call), (code), (c), (needle), #call, __LINE__)
+#define TRUE(cond) do { if (cond) passed++; else { printf("FAIL line %d: %s\n", __LINE__, #cond); failed++; } } while (0)
 
 #define W 64
 #define H 36
@@ -57,24 +146,65 @@ static void frame_defaults(NimbusFrame *f) {
     f->sun_illuminance = 10.0f;
 }
 
-static int render_ok(void) {
+static int32_t render_on(NimbusContext *c, NimbusTexture *color, NimbusTexture *out, double time) {
     NimbusFrame f;
     NimbusTargets t = {0};
     frame_defaults(&f);
-    t.scene_color = scene;
-    t.output = output;
-    return nimbus_context_render(ctx, &f, &t);
+    f.time = time;
+    t.scene_color = color;
+    t.output = out;
+    return nimbus_context_render(c, &f, &t);
 }
 
-static NimbusTexture *make_texture(uint32_t w, uint32_t h, uint32_t format) {
+static int32_t render_ok(void) { return render_on(ctx, scene, output, 0.0); }
+
+static NimbusTexture *make_texture_on(NimbusContext *c, uint32_t w, uint32_t h, uint32_t format) {
     NimbusTextureDesc d = {0};
     NimbusTexture *t = NULL;
     d.width = w; d.height = h; d.format = format;
-    if (nimbus_texture_create(ctx, &d, &t) != NIMBUS_OK) {
-        printf("could not create a %ux%u texture: %s\n", w, h, nimbus_context_last_error(ctx));
+    if (nimbus_texture_create(c, &d, &t) != NIMBUS_OK) {
+        printf("could not create a %ux%u texture: %s\n", w, h, nimbus_context_last_error(c));
         exit(1);
     }
     return t;
+}
+
+static NimbusTexture *make_texture(uint32_t w, uint32_t h, uint32_t format) {
+    return make_texture_on(ctx, w, h, format);
+}
+
+/* ---- log callback: counts messages, sees panics, and calls back into Nimbus ---------------- */
+static int log_count = 0, log_panics = 0, log_reentered = 0;
+
+static void log_cb(int32_t level, const char *message, void *user) {
+    log_count++;
+    if (level == 1 && strstr(message, "panic")) log_panics++;
+    if (!log_reentered) {
+        /* Re-entering from the callback used to deadlock on the library's log lock. */
+        log_reentered = 1;
+        (void)nimbus_set_log_callback(log_cb, user, 4);
+        (void)nimbus_result_name(NIMBUS_OK);
+    }
+}
+
+static void test_results_and_versions(void) {
+    TRUE(strcmp(nimbus_result_name(NIMBUS_ERROR_NULL_POINTER), "NIMBUS_ERROR_NULL_POINTER") == 0);
+    TRUE(strcmp(nimbus_result_name(NIMBUS_ERROR_DEVICE_LOST), "NIMBUS_ERROR_DEVICE_LOST") == 0);
+    TRUE(strcmp(nimbus_result_name(12345), "NIMBUS_UNKNOWN_RESULT") == 0);
+    TRUE(!empty(nimbus_result_message(NIMBUS_ERROR_INVALID_TARGET)));
+    TRUE(!empty(nimbus_result_message(-7777)));
+    TRUE(nimbus_version() == ((NIMBUS_VERSION_MAJOR << 16) | (NIMBUS_VERSION_MINOR << 8) | NIMBUS_VERSION_PATCH));
+    TRUE(NIMBUS_ABI_VERSION == ((NIMBUS_VERSION_MAJOR << 16) | NIMBUS_VERSION_MINOR));
+    TRUE(NIMBUS_ABI_MIN_MINOR >= 1 && NIMBUS_ABI_MIN_MINOR <= NIMBUS_VERSION_MINOR);
+    {
+        char want[32];
+        sprintf(want, "%d.%d.%d", NIMBUS_VERSION_MAJOR, NIMBUS_VERSION_MINOR, NIMBUS_VERSION_PATCH);
+        TRUE(strcmp(nimbus_version_string(), want) == 0);
+    }
+    TRUE(nimbus_context_adapter_name(NULL) == NULL);
+    EXPECT(nimbus_set_log_callback(log_cb, NULL, 9), NIMBUS_ERROR_INVALID_ARGUMENT);
+    EXPECT(nimbus_set_log_callback(log_cb, NULL, -1), NIMBUS_ERROR_INVALID_ARGUMENT);
+    EXPECT(nimbus_set_log_callback(log_cb, NULL, 4), NIMBUS_OK);
 }
 
 static void test_create(void) {
@@ -82,13 +212,21 @@ static void test_create(void) {
     NimbusContext *out = (NimbusContext *)&desc; /* must stay untouched on failure */
     NimbusContext *before = out;
     NimbusChainedStruct unknown = {999, NULL};
-    NimbusSettingsExt s = {0};
+    NimbusSettingsExt s = {0}, s2 = {0};
+    NimbusQualityExt q = {0};
     NimbusWindowHandle win = {0};
 
     EXPECT(nimbus_context_create(NULL, &out), NIMBUS_ERROR_NULL_POINTER);
     desc.abi_version = NIMBUS_ABI_VERSION;
     EXPECT(nimbus_context_create(&desc, NULL), NIMBUS_ERROR_NULL_POINTER);
+    /* The ABI rule: same major, minor from NIMBUS_ABI_MIN_MINOR to ours; never 0. */
+    desc.abi_version = 0;
+    EXPECT_MSG(NULL, nimbus_context_create(&desc, &out), NIMBUS_ERROR_ABI_VERSION, "abi_version is 0");
     desc.abi_version = NIMBUS_ABI_VERSION + (1u << 16);
+    EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_ABI_VERSION);
+    desc.abi_version = NIMBUS_ABI_VERSION + 1; /* a newer minor: may use unknown structs */
+    EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_ABI_VERSION);
+    desc.abi_version = (NIMBUS_VERSION_MAJOR << 16) | (NIMBUS_ABI_MIN_MINOR - 1);
     EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_ABI_VERSION);
     desc.abi_version = NIMBUS_ABI_VERSION;
     desc.next = &unknown;
@@ -97,6 +235,9 @@ static void test_create(void) {
     s.chain.next = &unknown;
     desc.next = &s.chain;
     EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_UNKNOWN_STRUCT);
+    s2.chain.s_type = NIMBUS_STYPE_SETTINGS;
+    s.chain.next = &s2.chain; /* the same extension twice */
+    EXPECT_MSG(NULL, nimbus_context_create(&desc, &out), NIMBUS_ERROR_UNKNOWN_STRUCT, "twice");
     s.chain.next = NULL;
     s.jitter = 7;
     EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_ARGUMENT);
@@ -105,16 +246,27 @@ static void test_create(void) {
     EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_ARGUMENT);
     s.initial_preset = 0;
     s.march_min_steps = 500; /* above the default maximum of 96 */
-    EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_SETTINGS);
+    EXPECT_MSG(NULL, nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_SETTINGS, "march.min_steps");
     s.march_min_steps = 0;
+    s.march_max_steps = 2000;
+    EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_SETTINGS);
+    s.march_max_steps = 0;
     s.planet_radius = -5.0f;
     EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_SETTINGS);
     s.planet_radius = NAN;
     EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_SETTINGS);
+    s.planet_radius = -1e30f;
+    EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_SETTINGS);
+    TRUE(strlen(nimbus_context_last_error(NULL)) < 200); /* huge numbers print short */
     s.planet_radius = 0.0f;
-    s.quality = 5; /* levels are 0 (default) and 1..4 */
-    EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_ARGUMENT);
-    s.quality = NIMBUS_QUALITY_DEFAULT;
+    s.max_distance = -1.0f;
+    EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_SETTINGS);
+    s.max_distance = 0.0f;
+    q.chain.s_type = NIMBUS_STYPE_QUALITY;
+    q.quality = 5; /* levels are 0 (default) and 1..4 */
+    s.chain.next = &q.chain;
+    EXPECT_MSG(NULL, nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_ARGUMENT, "quality");
+    q.quality = NIMBUS_QUALITY_HIGH;
     desc.window = &win;
     desc.width = 64; desc.height = 64;
     win.platform = 42;
@@ -123,13 +275,20 @@ static void test_create(void) {
     EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_NULL_POINTER);
     win.platform = NIMBUS_PLATFORM_WAYLAND;
     EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_NULL_POINTER);
+    win.platform = NIMBUS_PLATFORM_WIN32;
+    EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_ARGUMENT); /* HWND 0 */
+    win.platform = NIMBUS_PLATFORM_APPKIT;
+    EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_NULL_POINTER);
     desc.width = 0;
     EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_ARGUMENT);
-    if (out != before) { printf("FAIL: out was written on failure\n"); failed++; }
+    TRUE(out == before); /* out untouched on every failure */
     desc.window = NULL;
-    s.quality = NIMBUS_QUALITY_HIGH; /* the explicit step counts below refine the level */
+    /* The quality level first; the explicit step counts refine it. */
     s.march_max_steps = 64; s.march_min_steps = 32; s.jitter = NIMBUS_JITTER_OFF;
-    EXPECT(nimbus_context_create(&desc, &ctx), NIMBUS_OK);
+    log_count = 0;
+    EXPECT_ON(NULL, nimbus_context_create(&desc, &ctx), NIMBUS_OK);
+    TRUE(log_count > 0); /* wgpu's device creation logs at debug level */
+    TRUE(log_reentered);
 }
 
 static void test_textures(void) {
@@ -139,19 +298,23 @@ static void test_textures(void) {
     float buf[W * H * 4];
     size_t size = 0;
 
-    EXPECT(nimbus_texture_create(ctx, NULL, &t), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT_ON(ctx, nimbus_texture_create(ctx, NULL, &t), NIMBUS_ERROR_NULL_POINTER);
     d.width = W; d.height = H; d.format = NIMBUS_FORMAT_RGBA16_FLOAT;
     EXPECT(nimbus_texture_create(NULL, &d, &t), NIMBUS_ERROR_NULL_POINTER);
-    EXPECT(nimbus_texture_create(ctx, &d, NULL), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT_ON(ctx, nimbus_texture_create(ctx, &d, NULL), NIMBUS_ERROR_NULL_POINTER);
     d.format = 99;
-    EXPECT(nimbus_texture_create(ctx, &d, &t), NIMBUS_ERROR_INVALID_ARGUMENT);
+    EXPECT_MSG(ctx, nimbus_texture_create(ctx, &d, &t), NIMBUS_ERROR_INVALID_ARGUMENT, "format");
+    d.format = 0;
+    EXPECT_ON(ctx, nimbus_texture_create(ctx, &d, &t), NIMBUS_ERROR_INVALID_ARGUMENT);
     d.format = NIMBUS_FORMAT_RGBA16_FLOAT; d.width = 0;
-    EXPECT(nimbus_texture_create(ctx, &d, &t), NIMBUS_ERROR_INVALID_ARGUMENT);
+    EXPECT_ON(ctx, nimbus_texture_create(ctx, &d, &t), NIMBUS_ERROR_INVALID_ARGUMENT);
     d.width = 100000;
-    EXPECT(nimbus_texture_create(ctx, &d, &t), NIMBUS_ERROR_INVALID_ARGUMENT);
-    d.width = W; d.next = &unknown;
-    EXPECT(nimbus_texture_create(ctx, &d, &t), NIMBUS_ERROR_UNKNOWN_STRUCT);
-    if (t != NULL) { printf("FAIL: texture out written on failure\n"); failed++; }
+    EXPECT_ON(ctx, nimbus_texture_create(ctx, &d, &t), NIMBUS_ERROR_INVALID_ARGUMENT);
+    d.width = W; d.height = 0;
+    EXPECT_ON(ctx, nimbus_texture_create(ctx, &d, &t), NIMBUS_ERROR_INVALID_ARGUMENT);
+    d.height = H; d.next = &unknown;
+    EXPECT_ON(ctx, nimbus_texture_create(ctx, &d, &t), NIMBUS_ERROR_UNKNOWN_STRUCT);
+    TRUE(t == NULL); /* out untouched on failure */
 
     scene = make_texture(W, H, NIMBUS_FORMAT_RGBA32_FLOAT);
     output = make_texture(W, H, NIMBUS_FORMAT_RGBA16_FLOAT);
@@ -160,16 +323,20 @@ static void test_textures(void) {
     rgba32 = make_texture(W, H, NIMBUS_FORMAT_RGBA32_FLOAT);
     depth_rgba8 = make_texture(W, H, NIMBUS_FORMAT_RGBA8_UNORM);
 
+    /* Texture calls take no context: their messages are the thread's. */
     EXPECT(nimbus_texture_byte_size(scene, &size), NIMBUS_OK);
-    if (size != sizeof buf) { printf("FAIL: byte size %zu\n", size); failed++; }
+    TRUE(size == sizeof buf);
     EXPECT(nimbus_texture_byte_size(NULL, &size), NIMBUS_ERROR_NULL_POINTER);
     EXPECT(nimbus_texture_byte_size(scene, NULL), NIMBUS_ERROR_NULL_POINTER);
     memset(buf, 0, sizeof buf);
-    EXPECT(nimbus_texture_write(scene, buf, sizeof buf - 4), NIMBUS_ERROR_INVALID_TARGET);
+    EXPECT_MSG(NULL, nimbus_texture_write(scene, buf, sizeof buf - 4), NIMBUS_ERROR_INVALID_TARGET, "bytes");
+    EXPECT(nimbus_texture_write(scene, buf, 0), NIMBUS_ERROR_INVALID_TARGET);
     EXPECT(nimbus_texture_write(scene, NULL, sizeof buf), NIMBUS_ERROR_NULL_POINTER);
     EXPECT(nimbus_texture_write(NULL, buf, sizeof buf), NIMBUS_ERROR_NULL_POINTER);
     EXPECT(nimbus_texture_read(scene, buf, 17), NIMBUS_ERROR_INVALID_TARGET);
+    EXPECT(nimbus_texture_read(scene, buf, (size_t)-1), NIMBUS_ERROR_INVALID_TARGET);
     EXPECT(nimbus_texture_read(scene, NULL, sizeof buf), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT(nimbus_texture_read(NULL, buf, sizeof buf), NIMBUS_ERROR_NULL_POINTER);
     {
         int i;
         for (i = 0; i < W * H; i++) { buf[i * 4] = 0.2f; buf[i * 4 + 1] = 0.3f; buf[i * 4 + 2] = 0.6f; buf[i * 4 + 3] = 1.0f; }
@@ -177,7 +344,7 @@ static void test_textures(void) {
     EXPECT(nimbus_texture_write(scene, buf, sizeof buf), NIMBUS_OK);
     memset(buf, 0, sizeof buf);
     EXPECT(nimbus_texture_read(scene, buf, sizeof buf), NIMBUS_OK);
-    if (buf[1] != 0.3f) { printf("FAIL: texture round trip gave %f\n", (double)buf[1]); failed++; }
+    TRUE(buf[1] == 0.3f);
     nimbus_texture_destroy(NULL); /* no-op */
 }
 
@@ -189,128 +356,327 @@ static void test_render(void) {
     frame_defaults(&f);
     t.scene_color = scene; t.output = output;
     EXPECT(nimbus_context_render(NULL, &f, &t), NIMBUS_ERROR_NULL_POINTER);
-    EXPECT(nimbus_context_render(ctx, NULL, &t), NIMBUS_ERROR_NULL_POINTER);
-    EXPECT(nimbus_context_render(ctx, &f, NULL), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT_ON(ctx, nimbus_context_render(ctx, NULL, &t), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT_ON(ctx, nimbus_context_render(ctx, &f, NULL), NIMBUS_ERROR_NULL_POINTER);
     t.scene_color = NULL;
-    EXPECT(nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_NULL_POINTER);
     t.scene_color = scene;
     t.output = NULL;
-    EXPECT(nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET); /* headless: no window */
+    EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET, "no window");
     t.output = small_tex;
-    EXPECT(nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET);
+    EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET, "32x36");
     t.output = rgba32; t.scene_color = rgba32;
-    EXPECT(nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET); /* RGBA32F in place */
+    EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET, "NIMBUS_FORMAT_RGBA32_FLOAT");
+    TRUE(strstr(nimbus_context_last_error(ctx), "ColorTargets") == NULL); /* no Rust names */
     t.scene_color = depth; t.output = output;
-    EXPECT(nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET); /* R32F as color */
-    t.scene_color = scene; t.scene_depth = depth_rgba8;
-    EXPECT(nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET);
+    EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET, "targets.scene_color");
+    t.scene_color = scene; t.output = depth;
+    EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET, "targets.output");
+    t.output = output; t.scene_depth = depth_rgba8;
+    EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET, "NIMBUS_FORMAT_R32_FLOAT");
     t.scene_depth = depth;
     t.next = &unknown;
-    EXPECT(nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_UNKNOWN_STRUCT);
+    EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_UNKNOWN_STRUCT);
     t.next = NULL;
     f.next = &unknown;
-    EXPECT(nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_UNKNOWN_STRUCT);
+    EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_UNKNOWN_STRUCT);
     f.next = NULL;
     f.view[5] = NAN;
-    EXPECT(nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME);
+    EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME);
     frame_defaults(&f);
     memset(f.projection, 0, sizeof f.projection);
-    EXPECT(nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME);
+    EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME);
     frame_defaults(&f);
     memset(f.view, 0, sizeof f.view);
-    EXPECT(nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME);
+    EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME);
+    frame_defaults(&f);
+    f.projection[11] = 0.0f; f.projection[15] = 1.0f; /* orthographic */
+    EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME, "perspective");
     frame_defaults(&f);
     f.depth_flags = NIMBUS_DEPTH_REVERSED_Z; /* the projection is not reversed */
-    EXPECT(nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME);
+    EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME, "reversed");
+    f.depth_flags = NIMBUS_DEPTH_INFINITE_FAR; /* it has a far plane */
+    EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME, "far plane");
     f.depth_flags = 0x80;
-    EXPECT(nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_ARGUMENT);
+    EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_ARGUMENT, "0x80");
+    frame_defaults(&f);
+    mat_perspective(f.projection, 1.2f, (float)W / (float)H, 0.01f, 1e12f); /* infinite in f32 */
+    EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME, "f32");
+    f.depth_flags = NIMBUS_DEPTH_INFINITE_FAR;
+    EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_OK);
     frame_defaults(&f);
     f.sun_direction[0] = f.sun_direction[1] = f.sun_direction[2] = 0.0f;
-    EXPECT(nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME);
+    EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME);
+    frame_defaults(&f);
+    f.sun_direction[1] = INFINITY;
+    EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME);
     frame_defaults(&f);
     f.sun_illuminance = NAN;
-    EXPECT(nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME);
+    EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME);
+    f.sun_illuminance = -1.0f;
+    EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME);
+    frame_defaults(&f);
+    f.sun_color[0] = -1.0f;
+    EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME);
     frame_defaults(&f);
     f.time = INFINITY;
-    EXPECT(nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME);
-    /* Still usable: with depth, then in place. */
+    EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_FRAME);
+    f.time = -1e300;
+    /* Finite: accepted (weather before time 0 is the initial weather). */
+    EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_OK);
+    /* Still usable: with depth, then in place, then an OpenGL-style projection with its flag. */
     frame_defaults(&f);
-    EXPECT(nimbus_context_render(ctx, &f, &t), NIMBUS_OK);
+    EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_OK);
     t.scene_color = output; t.output = output; /* in place (RGBA16F blends) */
-    EXPECT(nimbus_context_render(ctx, &f, &t), NIMBUS_OK);
-    EXPECT(render_ok(), NIMBUS_OK);
+    EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_OK);
+    {
+        /* glFrustum-style: z_clip in [-w, w]. */
+        float n = 1.0f, fa = 100000.0f, y = 1.0f / tanf(0.6f);
+        memset(f.projection, 0, sizeof f.projection);
+        f.projection[0] = y * (float)H / (float)W; f.projection[5] = y;
+        f.projection[10] = -(fa + n) / (fa - n); f.projection[11] = -1.0f;
+        f.projection[14] = -2.0f * fa * n / (fa - n);
+        f.depth_flags = NIMBUS_DEPTH_GL_CLIP_Z;
+        EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_OK);
+    }
+    EXPECT_ON(ctx, render_ok(), NIMBUS_OK);
 }
 
 static void test_weather_and_resize(void) {
     FILE *fp;
     const char *bad = "nimbus_api_test_bad_preset.toml";
-    EXPECT(nimbus_context_set_weather(ctx, 0, 0, 0.0, 1.0), NIMBUS_ERROR_INVALID_ARGUMENT);
-    EXPECT(nimbus_context_set_weather(ctx, 99, 0, 0.0, 1.0), NIMBUS_ERROR_INVALID_ARGUMENT);
-    EXPECT(nimbus_context_set_weather(ctx, NIMBUS_PRESET_STORMY, 0x40, 0.0, 1.0), NIMBUS_ERROR_INVALID_ARGUMENT);
-    EXPECT(nimbus_context_set_weather(ctx, NIMBUS_PRESET_STORMY, 0, 0.0, NAN), NIMBUS_ERROR_WEATHER);
-    EXPECT(nimbus_context_set_weather(ctx, NIMBUS_PRESET_STORMY, 0, 0.0, -1.0), NIMBUS_ERROR_WEATHER);
+    EXPECT_ON(ctx, nimbus_context_set_weather(ctx, 0, 0, 0.0, 1.0), NIMBUS_ERROR_INVALID_ARGUMENT);
+    EXPECT_ON(ctx, nimbus_context_set_weather(ctx, 99, 0, 0.0, 1.0), NIMBUS_ERROR_INVALID_ARGUMENT);
+    EXPECT_ON(ctx, nimbus_context_set_weather(ctx, NIMBUS_PRESET_STORMY, 0x40, 0.0, 1.0), NIMBUS_ERROR_INVALID_ARGUMENT);
+    EXPECT_ON(ctx, nimbus_context_set_weather(ctx, NIMBUS_PRESET_STORMY, 0, 0.0, NAN), NIMBUS_ERROR_WEATHER);
+    EXPECT_ON(ctx, nimbus_context_set_weather(ctx, NIMBUS_PRESET_STORMY, 0, 0.0, -1.0), NIMBUS_ERROR_WEATHER);
+    EXPECT_ON(ctx, nimbus_context_set_weather(ctx, NIMBUS_PRESET_STORMY, 0, INFINITY, 1.0), NIMBUS_ERROR_WEATHER);
     EXPECT(nimbus_context_set_weather(NULL, NIMBUS_PRESET_STORMY, 0, 0.0, 1.0), NIMBUS_ERROR_NULL_POINTER);
-    EXPECT(nimbus_context_set_weather(ctx, NIMBUS_PRESET_STORMY, NIMBUS_WEATHER_CIRRUS, 5.0, 10.0), NIMBUS_OK);
-    EXPECT(nimbus_context_set_weather(ctx, NIMBUS_PRESET_CLEAR, 0, 4.0, 1.0), NIMBUS_ERROR_WEATHER); /* out of order */
-    EXPECT(nimbus_context_set_weather(ctx, NIMBUS_PRESET_OVERCAST, NIMBUS_WEATHER_HORIZON_GRADIENT, 8.0, 3.0), NIMBUS_OK);
-    EXPECT(nimbus_context_load_weather(ctx, NULL, 9.0, 1.0), NIMBUS_ERROR_NULL_POINTER);
-    EXPECT(nimbus_context_load_weather(ctx, "/nonexistent/weather.toml", 9.0, 1.0), NIMBUS_ERROR_PRESET_FILE);
+    EXPECT_ON(ctx, nimbus_context_set_weather(ctx, NIMBUS_PRESET_STORMY, NIMBUS_WEATHER_CIRRUS, 5.0, 10.0), NIMBUS_OK);
+    EXPECT_ON(ctx, nimbus_context_set_weather(ctx, NIMBUS_PRESET_CLEAR, 0, 4.0, 1.0), NIMBUS_ERROR_WEATHER); /* out of order */
+    EXPECT_ON(ctx, nimbus_context_set_weather(ctx, NIMBUS_PRESET_OVERCAST, NIMBUS_WEATHER_HORIZON_GRADIENT, 8.0, 3.0), NIMBUS_OK);
+    EXPECT_ON(ctx, nimbus_context_load_weather(ctx, NULL, 9.0, 1.0), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT_ON(ctx, nimbus_context_load_weather(ctx, "/nonexistent/weather.toml", 9.0, 1.0), NIMBUS_ERROR_PRESET_FILE);
+    EXPECT_MSG(ctx, nimbus_context_load_weather(ctx, "/dev/zero", 9.0, 1.0), NIMBUS_ERROR_PRESET_FILE, "larger than");
+    EXPECT_ON(ctx, nimbus_context_load_weather(ctx, "/", 9.0, 1.0), NIMBUS_ERROR_PRESET_FILE); /* a directory */
+    EXPECT_ON(ctx, nimbus_context_load_weather(ctx, "\xff\xfe", 9.0, 1.0), NIMBUS_ERROR_INVALID_ARGUMENT); /* not UTF-8 */
     fp = fopen(bad, "w");
     if (fp) {
         fputs("name = \"bad\"\n[clouds]\ncoverage = 3.5\n", fp);
         fclose(fp);
-        EXPECT(nimbus_context_load_weather(ctx, bad, 9.0, 1.0), NIMBUS_ERROR_PRESET_FILE);
-        if (!strstr(nimbus_context_last_error(ctx), "line 3")) { printf("FAIL: no line in message\n"); failed++; }
+        EXPECT_MSG(ctx, nimbus_context_load_weather(ctx, bad, 9.0, 1.0), NIMBUS_ERROR_PRESET_FILE, "line 3");
         fp = fopen(bad, "w");
         if (fp) { fputs("[clouds\n", fp); fclose(fp); }
-        EXPECT(nimbus_context_load_weather(ctx, bad, 9.0, 1.0), NIMBUS_ERROR_PRESET_FILE);
+        EXPECT_ON(ctx, nimbus_context_load_weather(ctx, bad, 9.0, 1.0), NIMBUS_ERROR_PRESET_FILE);
+        fp = fopen(bad, "w");
+        if (fp) { fputs("clouds = 3\n", fp); fclose(fp); }
+        EXPECT_MSG(ctx, nimbus_context_load_weather(ctx, bad, 9.0, 1.0), NIMBUS_ERROR_PRESET_FILE, "table");
+        TRUE(strstr(nimbus_context_last_error(ctx), "struct") == NULL); /* no Rust type names */
+        fp = fopen(bad, "w");
+        if (fp) { fputs("# only a comment\n\n", fp); fclose(fp); }
+        EXPECT_MSG(ctx, nimbus_context_load_weather(ctx, bad, 9.0, 1.0), NIMBUS_ERROR_PRESET_FILE, "no settings");
         remove(bad);
     }
-    EXPECT(nimbus_context_resize(ctx, 0, 10), NIMBUS_ERROR_INVALID_ARGUMENT);
-    EXPECT(nimbus_context_resize(ctx, 10, 1000000), NIMBUS_ERROR_INVALID_ARGUMENT);
+    /* Presets from memory, templates out, the transition's state, and cancelling. */
+    {
+        const char *mine = "name = \"mine\"\n[clouds]\ncoverage = 0.3\n";
+        char small[8], *tmpl;
+        size_t need = 0, cap;
+        NimbusWeatherState st;
+        NimbusChainedStruct unknown = {999, NULL};
+        memset(&st, 0, sizeof st);
+        EXPECT_ON(ctx, nimbus_context_set_weather_toml(ctx, NULL, 10, 20.0, 1.0), NIMBUS_ERROR_NULL_POINTER);
+        EXPECT_MSG(ctx, nimbus_context_set_weather_toml(ctx, mine, 1u << 20, 20.0, 1.0), NIMBUS_ERROR_PRESET_FILE, "at most");
+        EXPECT_MSG(ctx, nimbus_context_set_weather_toml(ctx, "[clouds]\ncoverage = 9\n", 22, 20.0, 1.0), NIMBUS_ERROR_PRESET_FILE, "line 2");
+        EXPECT_ON(ctx, nimbus_context_set_weather_toml(ctx, "\xff\xfe", 2, 20.0, 1.0), NIMBUS_ERROR_PRESET_FILE);
+        EXPECT_ON(ctx, nimbus_context_set_weather_toml(ctx, mine, strlen(mine), 20.0, 10.0), NIMBUS_OK);
+        EXPECT_ON(ctx, nimbus_context_weather_state(ctx, 25.0, NULL), NIMBUS_ERROR_NULL_POINTER);
+        EXPECT_ON(ctx, nimbus_context_weather_state(ctx, NAN, &st), NIMBUS_ERROR_INVALID_ARGUMENT);
+        st.next = &unknown;
+        EXPECT_ON(ctx, nimbus_context_weather_state(ctx, 25.0, &st), NIMBUS_ERROR_UNKNOWN_STRUCT);
+        st.next = NULL;
+        EXPECT_ON(ctx, nimbus_context_weather_state(ctx, 25.0, &st), NIMBUS_OK);
+        TRUE(strcmp(st.to_name, "mine") == 0 && st.phase == NIMBUS_TRANSITION_RUNNING);
+        TRUE(st.progress > 0.0f && st.progress < 1.0f && st.start == 20.0 && st.duration == 10.0);
+        EXPECT_ON(ctx, nimbus_context_weather_state(ctx, 15.0, &st), NIMBUS_OK);
+        TRUE(st.phase == NIMBUS_TRANSITION_SCHEDULED && st.progress == 0.0f);
+        EXPECT_ON(ctx, nimbus_context_cancel_weather(ctx, NAN), NIMBUS_ERROR_WEATHER);
+        EXPECT_ON(ctx, nimbus_context_cancel_weather(ctx, 25.0), NIMBUS_OK);
+        EXPECT_ON(ctx, nimbus_context_weather_state(ctx, 99.0, &st), NIMBUS_OK);
+        TRUE(st.phase == NIMBUS_TRANSITION_DONE && st.duration == 0.0);
+        EXPECT(nimbus_preset_write_toml(NIMBUS_PRESET_OVERCAST, 0, NULL, NULL), NIMBUS_ERROR_NULL_POINTER);
+        EXPECT(nimbus_preset_write_toml(42, 0, NULL, &need), NIMBUS_ERROR_INVALID_ARGUMENT);
+        EXPECT(nimbus_preset_write_toml(NIMBUS_PRESET_OVERCAST, 0x40, NULL, &need), NIMBUS_ERROR_INVALID_ARGUMENT);
+        EXPECT(nimbus_preset_write_toml(NIMBUS_PRESET_OVERCAST, NIMBUS_WEATHER_CIRRUS, NULL, &need), NIMBUS_OK);
+        TRUE(need > 100);
+        cap = sizeof small;
+        EXPECT_MSG(NULL, nimbus_preset_write_toml(NIMBUS_PRESET_OVERCAST, NIMBUS_WEATHER_CIRRUS, small, &cap), NIMBUS_ERROR_INVALID_ARGUMENT, "needs");
+        TRUE(cap == sizeof small); /* untouched on failure */
+        tmpl = (char *)malloc(need);
+        cap = need;
+        EXPECT(nimbus_preset_write_toml(NIMBUS_PRESET_OVERCAST, NIMBUS_WEATHER_CIRRUS, tmpl, &cap), NIMBUS_OK);
+        TRUE(cap == need && strlen(tmpl) + 1 == need && strstr(tmpl, "overcast") != NULL);
+        /* The template loads back (after the held sky's time). */
+        EXPECT_ON(ctx, nimbus_context_set_weather_toml(ctx, tmpl, strlen(tmpl), 30.0, 0.0), NIMBUS_OK);
+        free(tmpl);
+    }
+    EXPECT_ON(ctx, nimbus_context_resize(ctx, 0, 10), NIMBUS_ERROR_INVALID_ARGUMENT);
+    EXPECT_ON(ctx, nimbus_context_resize(ctx, 10, 1000000), NIMBUS_ERROR_INVALID_ARGUMENT);
     EXPECT(nimbus_context_resize(NULL, 10, 10), NIMBUS_ERROR_NULL_POINTER);
-    EXPECT(render_ok(), NIMBUS_OK); /* render after a failed resize */
-}
-
-static void log_cb(int32_t level, const char *message, void *user) {
-    (void)level; (void)message;
-    ++*(int *)user;
-}
-
-static void test_misc_and_poison(void) {
-    static int logs = 0;
-    EXPECT(nimbus_set_log_callback(log_cb, &logs, 9), NIMBUS_ERROR_INVALID_ARGUMENT);
-    EXPECT(nimbus_set_log_callback(log_cb, &logs, 2), NIMBUS_OK);
-    EXPECT(nimbus_set_log_callback(NULL, NULL, 0), NIMBUS_OK);
-    if (nimbus_version() != ((NIMBUS_VERSION_MAJOR << 16) | (NIMBUS_VERSION_MINOR << 8) | NIMBUS_VERSION_PATCH)) {
-        printf("FAIL: nimbus_version() disagrees with the header\n"); failed++;
-    } else passed++;
-    if (strncmp(nimbus_version_string(), "0.1", 3) != 0) { printf("FAIL: version string\n"); failed++; } else passed++;
-    if (nimbus_context_adapter_name(NULL) != NULL) { printf("FAIL: adapter name of NULL\n"); failed++; } else passed++;
-    printf("adapter: %s\n", nimbus_context_adapter_name(ctx));
-
+    EXPECT_ON(ctx, render_ok(), NIMBUS_OK); /* render after a failed resize */
+    EXPECT_ON(ctx, nimbus_context_reset_history(ctx), NIMBUS_OK);
     EXPECT(nimbus_context_reset_history(NULL), NIMBUS_ERROR_NULL_POINTER);
-    EXPECT(nimbus_context_reset_history(ctx), NIMBUS_OK);
-    EXPECT(render_ok(), NIMBUS_OK);
+}
 
-    EXPECT(nimbus_context_debug_panic(ctx), NIMBUS_ERROR_PANIC);
-    EXPECT(nimbus_context_reset_history(ctx), NIMBUS_ERROR_POISONED);
-    EXPECT(render_ok(), NIMBUS_ERROR_POISONED);
-    EXPECT(nimbus_context_set_weather(ctx, NIMBUS_PRESET_CLEAR, 0, 100.0, 1.0), NIMBUS_ERROR_POISONED);
+/* ---- a second context: textures belong to their context; two threads at once --------------- */
+struct worker { NimbusContext *c; NimbusTexture *color, *out; int failures; };
+
+static void *render_frames(void *arg) {
+    struct worker *w = (struct worker *)arg;
+    int i;
+    for (i = 0; i < 12; i++)
+        if (render_on(w->c, w->color, w->out, i / 30.0) != NIMBUS_OK) w->failures++;
+    return NULL;
+}
+
+static void test_second_context(void) {
+    NimbusContextDesc desc = {0};
+    NimbusSettingsExt s = {0};
+    NimbusContext *b = NULL;
+    NimbusTexture *b_color, *b_out, *b_depth, *orphan;
+    NimbusTargets t = {0};
+    NimbusFrame f;
+    uint32_t garbage = 0xdeadbeefu;
+    float px[4 * 4 * 4];
+    size_t size = 0;
+
+    /* ABI 0.2: the settings struct's tail padding is ignored, whatever it holds; and a
+     * maximum step count alone no longer clashes with the defaulted minimum. */
+    desc.abi_version = NIMBUS_ABI_VERSION;
+    s.chain.s_type = NIMBUS_STYPE_SETTINGS;
+    s.march_max_steps = 10;
+    memcpy((char *)&s + 44, &garbage, sizeof garbage);
+    desc.next = &s.chain;
+    EXPECT_ON(NULL, nimbus_context_create(&desc, &b), NIMBUS_OK);
+    if (!b) return;
+    b_color = make_texture_on(b, W, H, NIMBUS_FORMAT_RGBA16_FLOAT);
+    b_out = make_texture_on(b, W, H, NIMBUS_FORMAT_RGBA16_FLOAT);
+    b_depth = make_texture_on(b, W, H, NIMBUS_FORMAT_R32_FLOAT);
+    orphan = make_texture_on(b, 4, 4, NIMBUS_FORMAT_RGBA32_FLOAT);
+
+    /* Textures of b given to ctx: refused, naming the argument; nothing is drawn. */
+    frame_defaults(&f);
+    t.scene_color = b_color; t.output = output;
+    EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET, "targets.scene_color was created by another context");
+    t.scene_color = scene; t.output = b_out;
+    EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET, "targets.output");
+    t.output = output; t.scene_depth = b_depth;
+    EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET, "targets.scene_depth");
+    t.scene_color = b_color; t.output = b_color; t.scene_depth = depth; /* and the reverse */
+    EXPECT_MSG(b, nimbus_context_render(b, &f, &t), NIMBUS_ERROR_INVALID_TARGET, "targets.scene_depth");
+    EXPECT_ON(ctx, render_ok(), NIMBUS_OK);
+
+    /* Two contexts rendering at once on two threads (the header allows it). The log
+     * callback could run on both threads: errors only, so it stays quiet. */
+    EXPECT(nimbus_set_log_callback(log_cb, NULL, 1), NIMBUS_OK);
+    {
+        pthread_t ta, tb;
+        struct worker wa, wb;
+        wa.c = ctx; wa.color = scene; wa.out = output; wa.failures = 0;
+        wb.c = b; wb.color = b_color; wb.out = b_out; wb.failures = 0;
+        pthread_create(&ta, NULL, render_frames, &wa);
+        pthread_create(&tb, NULL, render_frames, &wb);
+        pthread_join(ta, NULL);
+        pthread_join(tb, NULL);
+        TRUE(wa.failures == 0 && wb.failures == 0);
+    }
+
+    nimbus_texture_destroy(b_color); nimbus_texture_destroy(b_out); nimbus_texture_destroy(b_depth);
+    nimbus_context_destroy(b);
+    /* A texture outliving its context: only destroy works. */
+    EXPECT_MSG(NULL, nimbus_texture_write(orphan, px, sizeof px), NIMBUS_ERROR_INVALID_TARGET, "destroyed");
+    EXPECT(nimbus_texture_read(orphan, px, sizeof px), NIMBUS_ERROR_INVALID_TARGET);
+    EXPECT(nimbus_texture_byte_size(orphan, &size), NIMBUS_ERROR_INVALID_TARGET);
+    t.scene_color = orphan; t.output = output; t.scene_depth = NULL;
+    EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET, "destroyed");
+    nimbus_texture_destroy(orphan);
+    EXPECT_ON(ctx, render_ok(), NIMBUS_OK);
+}
+
+static void test_old_header_and_device_loss(void) {
+#ifdef NIMBUS_TEST_HOOKS
+    NimbusContextDesc desc = {0};
+    NimbusSettingsExt s = {0};
+    NimbusContext *c = NULL;
+    NimbusTexture *color, *out;
+    uint32_t bad_level = 77, low = NIMBUS_QUALITY_LOW;
+
+    /* A header of ABI 0.1 declared `quality` at offset 44 of NimbusSettingsExt: read there. */
+    desc.abi_version = (NIMBUS_VERSION_MAJOR << 16) | 1u;
+    s.chain.s_type = NIMBUS_STYPE_SETTINGS;
+    desc.next = &s.chain;
+    memcpy((char *)&s + 44, &bad_level, sizeof bad_level);
+    EXPECT_MSG(NULL, nimbus_context_create(&desc, &c), NIMBUS_ERROR_INVALID_ARGUMENT, "quality");
+    memcpy((char *)&s + 44, &low, sizeof low);
+    EXPECT_ON(NULL, nimbus_context_create(&desc, &c), NIMBUS_OK);
+    if (!c) return;
+    color = make_texture_on(c, W, H, NIMBUS_FORMAT_RGBA16_FLOAT);
+    out = make_texture_on(c, W, H, NIMBUS_FORMAT_RGBA16_FLOAT);
+    EXPECT_ON(c, render_on(c, color, out, 0.0), NIMBUS_OK);
+
+    /* The device goes away: every call says so; destroy works; a new context works. */
+    EXPECT_ON(c, nimbus_test_hook_lose_device(c), NIMBUS_OK);
+    EXPECT_MSG(c, render_on(c, color, out, 0.1), NIMBUS_ERROR_DEVICE_LOST, "lost");
+    EXPECT_ON(c, nimbus_context_set_weather(c, NIMBUS_PRESET_CLEAR, 0, 1.0, 1.0), NIMBUS_ERROR_DEVICE_LOST);
+    EXPECT_ON(c, nimbus_context_reset_history(c), NIMBUS_ERROR_DEVICE_LOST);
+    nimbus_texture_destroy(color); nimbus_texture_destroy(out);
+    nimbus_context_destroy(c);
+    c = NULL;
+    desc.abi_version = NIMBUS_ABI_VERSION;
+    desc.next = NULL;
+    EXPECT_ON(NULL, nimbus_context_create(&desc, &c), NIMBUS_OK);
+    if (c) {
+        color = make_texture_on(c, W, H, NIMBUS_FORMAT_RGBA16_FLOAT);
+        out = make_texture_on(c, W, H, NIMBUS_FORMAT_RGBA16_FLOAT);
+        EXPECT_ON(c, render_on(c, color, out, 0.0), NIMBUS_OK);
+        nimbus_texture_destroy(color); nimbus_texture_destroy(out);
+        nimbus_context_destroy(c);
+    }
+#endif
+}
+
+static void test_poison(void) {
+#ifdef NIMBUS_TEST_HOOKS
+    log_panics = 0;
+    EXPECT_MSG(ctx, nimbus_test_hook_panic(ctx), NIMBUS_ERROR_PANIC, "panic inside Nimbus");
+    TRUE(log_panics == 1); /* the panic went to the log callback, not to stderr */
+    EXPECT_MSG(ctx, nimbus_context_reset_history(ctx), NIMBUS_ERROR_POISONED, "poisoned");
+    EXPECT_ON(ctx, render_ok(), NIMBUS_ERROR_POISONED);
+    EXPECT_ON(ctx, nimbus_context_set_weather(ctx, NIMBUS_PRESET_CLEAR, 0, 100.0, 1.0), NIMBUS_ERROR_POISONED);
+    EXPECT_ON(ctx, nimbus_context_resize(ctx, 10, 10), NIMBUS_ERROR_POISONED);
+#else
+    printf("no test hooks: the panic and device-loss paths are not exercised\n");
+    failed++;
+#endif
     nimbus_texture_destroy(scene); nimbus_texture_destroy(output); nimbus_texture_destroy(depth);
     nimbus_texture_destroy(small_tex); nimbus_texture_destroy(rgba32); nimbus_texture_destroy(depth_rgba8);
     nimbus_context_destroy(ctx);
     nimbus_context_destroy(NULL); /* no-op */
     ctx = NULL;
+    EXPECT(nimbus_set_log_callback(NULL, NULL, 0), NIMBUS_OK);
 }
 
 int main(void) {
+    test_results_and_versions();
     test_create();
     if (!ctx) { printf("no context: %s\n", nimbus_context_last_error(NULL)); return 1; }
     test_textures();
     test_render();
     test_weather_and_resize();
-    test_misc_and_poison();
+    test_second_context();
+    test_old_header_and_device_loss();
+    test_poison();
+    printf("bad-input cases: %d\n", bad_cases);
     printf("%d passed, %d failed\n", passed, failed);
     return failed == 0 ? 0 : 1;
 }
