@@ -168,7 +168,9 @@ impl Camera {
     /// The projection in wgpu clip space (depth in [0, 1]), whatever the host's convention.
     fn zero_one_projection(&self) -> Mat4 {
         if self.depth.gl_clip_z {
-            GL_TO_ZERO_ONE * self.projection
+            // In f64, rounded once: the z row's 1 + A is tiny for a far far plane, and an f32
+            // product would round A twice and move the far plane by percents.
+            (GL_TO_ZERO_ONE.as_dmat4() * self.projection.as_dmat4()).as_mat4()
         } else {
             self.projection
         }
@@ -269,6 +271,12 @@ impl Sun {
 }
 
 impl FrameInputs {
+    /// Checks the inputs exactly as [`crate::Renderer::prepare`] does, without a renderer: the
+    /// matrices, the declared depth convention against the projection, the sun and the time.
+    pub fn check(&self) -> Result<()> {
+        self.validate().map(|_| ())
+    }
+
     pub(crate) fn validate(&self) -> Result<(CameraDerived, Vec3)> {
         if !self.time.is_finite() {
             return Err(invalid_frame(

@@ -252,15 +252,31 @@ fn in_place_composite_matches_separate_output() {
     }
 }
 
+/// The depth a `projection` in `convention` writes for the scene depth `d0` of the standard
+/// projection `p0` (the same view distance; sky stays the far value).
+fn reproject_depth(d0: f32, p0: &Mat4, projection: &Mat4, convention: DepthConvention) -> f32 {
+    if d0 == 1.0 {
+        return convention.far_value();
+    }
+    let z = nimbus::frame::linearize_depth(d0, p0, DepthConvention::default());
+    let c = *projection * Vec4::new(0.0, 0.0, -z, 1.0);
+    c.z / c.w
+}
+
 #[test]
 fn depth_conventions_see_the_same_clouds() {
-    let mut h = headless(quiet(small_noise(1)));
-    let view = standard_views()[0];
+    // Coarse probes step past a thin wisp or onto it on a one-ulp change of the ray, which
+    // another matrix gives: fine steps only, so the comparison is of depth handling.
+    let mut s = quiet(small_noise(1));
+    s.march.coarse_then_fine = false;
+    let mut h = headless(s);
+    let view = standard_views()[4]; // a ridge in front of the clouds
     let scene = view.scene(W, H);
-    h.upload_scene(&scene.color, None).unwrap();
+    h.upload_scene(&scene.color, Some(&scene.depth)).unwrap();
     let base = view.frame(W, H, 0.0);
     h.render(&base).unwrap();
-    let reference = h.read_clouds().unwrap();
+    let reference = h.read_output().unwrap();
+    assert!(scene.depth.iter().any(|d| *d < 1.0), "the ridge occludes");
     let aspect = W as f32 / H as f32;
     for (projection, depth) in [
         (
@@ -279,19 +295,76 @@ fn depth_conventions_see_the_same_clouds() {
                 ..Default::default()
             },
         ),
+        (
+            Mat4::perspective_rh_gl(view.fov_y, aspect, 1.0, 400_000.0),
+            DepthConvention {
+                gl_clip_z: true,
+                ..Default::default()
+            },
+        ),
     ] {
+        // The same scene distances, written as this convention's depth buffer holds them.
+        let depth_buffer: Vec<f32> = scene
+            .depth
+            .iter()
+            .map(|d| {
+                let zero_one = if depth.gl_clip_z {
+                    // OpenGL writes window depth: (z_ndc + 1) / 2.
+                    (reproject_depth(*d, &base.camera.projection, &projection, depth) + 1.0) * 0.5
+                } else {
+                    reproject_depth(*d, &base.camera.projection, &projection, depth)
+                };
+                if *d == 1.0 {
+                    depth.far_value()
+                } else {
+                    zero_one.clamp(0.0, 1.0)
+                }
+            })
+            .collect();
+        h.upload_scene(&scene.color, Some(&depth_buffer)).unwrap();
         let mut frame = base;
         frame.camera.projection = projection;
         frame.camera.depth = depth;
         h.render(&frame).unwrap();
-        let got = h.read_clouds().unwrap();
-        let worst = reference
+        let got = h.read_output().unwrap();
+        // Another matrix moves each ray by an ulp, and a march step more or less shifts a sky
+        // pixel by a percent or two: judge the image, not single pixels. What a misread depth
+        // buffer does is far larger (see the no-depth render below).
+        let mean = reference
             .iter()
             .zip(&got)
-            .map(|(a, b)| (a[3] - b[3]).abs())
-            .fold(0.0f32, f32::max);
-        assert!(worst < 0.02, "{depth:?}: transmittance differs by {worst}");
+            .map(|(a, b)| (0..3).map(|c| (a[c] - b[c]).abs()).sum::<f32>() / 3.0)
+            .sum::<f32>()
+            / got.len() as f32;
+        let moved = (0..got.len())
+            .filter(|&i| (0..3).any(|c| (reference[i][c] - got[i][c]).abs() > 0.02))
+            .count();
+        assert!(mean < 5e-4, "{depth:?}: mean difference {mean}");
+        assert!(
+            moved * 200 < got.len(),
+            "{depth:?}: {moved} pixels moved by > 0.02"
+        );
+        // Pixels the ridge hides keep the ridge in every convention.
+        for (i, d) in scene.depth.iter().enumerate() {
+            if *d < 1.0 {
+                assert!(
+                    (got[i][0] - reference[i][0]).abs() < 0.02,
+                    "{depth:?}: occluded pixel {i}"
+                );
+            }
+        }
     }
+    // The depth buffer does matter here: without it the image differs (so the agreement above
+    // is not that of conventions all ignoring depth).
+    h.upload_scene(&scene.color, None).unwrap();
+    h.render(&base).unwrap();
+    let without = h.read_output().unwrap();
+    let moved = reference
+        .iter()
+        .zip(&without)
+        .map(|(a, b)| (a[0] - b[0]).abs())
+        .fold(0.0f32, f32::max);
+    assert!(moved > 0.05, "the ridge's depth changed nothing ({moved})");
 }
 
 // ---- the integrator against a closed form ----------------------------------------------------
@@ -375,23 +448,27 @@ fn homogeneous_slab_matches_closed_form_single_scattering() {
 
 #[test]
 fn homogeneous_sphere_is_round_and_transmits_by_beer_lambert() {
-    let mut settings = small_noise(1);
+    // Every pixel traced (no temporal reconstruction), no jitter, no early exit.
+    let mut settings = quiet(small_noise(1));
     let center = Vec3::new(0.0, 2_000.0, -3_000.0);
+    let (radius, sigma) = (500.0f32, 0.002f32);
     settings.debug_density = DebugDensity::Sphere {
         center,
-        radius: 500.0,
+        radius,
         density: 1.0,
     };
-    settings.weather.clouds.extinction = 0.002;
-    settings.march.min_steps = 128;
-    settings.march.max_steps = 128;
+    settings.weather.clouds.extinction = sigma;
+    settings.march.min_steps = 256;
+    settings.march.max_steps = 256;
     settings.march.transmittance_cutoff = 0.0;
     let mut h = headless(settings);
     let eye = Vec3::new(0.0, 2_000.0, 0.0);
+    let view = Mat4::look_at_rh(eye, center, Vec3::Y);
+    let projection = Mat4::perspective_rh(30f32.to_radians(), W as f32 / H as f32, 1.0, 1e5);
     let frame = FrameInputs {
         camera: Camera {
-            view: Mat4::look_at_rh(eye, center, Vec3::Y),
-            projection: Mat4::perspective_rh(30f32.to_radians(), W as f32 / H as f32, 1.0, 1e5),
+            view,
+            projection,
             depth: DepthConvention::default(),
         },
         sun: Sun::default(),
@@ -401,11 +478,44 @@ fn homogeneous_sphere_is_round_and_transmits_by_beer_lambert() {
         .unwrap();
     h.render(&frame).unwrap();
     let clouds = h.read_clouds().unwrap();
-    // The center ray crosses the full diameter: T = exp(-σ 2r) = exp(-2).
-    let c = clouds[((H / 2) * W + W / 2) as usize];
-    assert!((c[3] - (-2.0f32).exp()).abs() < 0.01, "center T {}", c[3]);
-    // Corners miss the sphere entirely.
-    assert_eq!(clouds[0], [0.0, 0.0, 0.0, 1.0]);
+    // Each pixel's own ray against the sphere: T = exp(-σ × chord). Pixels whose ray grazes
+    // the rim (within half a pixel's angle) are left out: a step there straddles the edge.
+    let inv = (projection * view).inverse();
+    let pixel_angle = 30f32.to_radians() / H as f32;
+    let distance = (center - eye).length();
+    let (mut inside, mut worst) = (0, 0.0f32);
+    for y in 0..H {
+        for x in 0..W {
+            let ndc = Vec4::new(
+                (x as f32 + 0.5) / W as f32 * 2.0 - 1.0,
+                1.0 - (y as f32 + 0.5) / H as f32 * 2.0,
+                0.5,
+                1.0,
+            );
+            let p = inv * ndc;
+            let dir = (p.truncate() / p.w - eye).normalize();
+            let along = (center - eye).dot(dir);
+            let miss = ((center - eye).length_squared() - along * along).sqrt();
+            if (miss - radius).abs() < distance * pixel_angle {
+                continue;
+            }
+            let chord = if miss < radius {
+                inside += 1;
+                2.0 * (radius * radius - miss * miss).sqrt()
+            } else {
+                0.0
+            };
+            let t = clouds[(y * W + x) as usize][3];
+            worst = worst.max((t - (-sigma * chord).exp()).abs());
+        }
+    }
+    // The disc covers what its angular radius says: asin(r / d) over a pixel angle.
+    let disc = std::f32::consts::PI * ((radius / distance).asin() / pixel_angle).powi(2);
+    assert!(
+        (inside as f32) > 0.8 * disc && (inside as f32) < 1.05 * disc,
+        "{inside} pixels inside, the disc holds {disc:.0}"
+    );
+    assert!(worst < 0.01, "transmittance off the closed form by {worst}");
 }
 
 // ---- errors, never panics ----------------------------------------------------------------------
@@ -652,14 +762,34 @@ fn renderer_refuses_bad_targets_and_turns_wgpu_errors_into_errors() {
         r.encode(&mut enc, &in_place),
         Err(Error::NotPrepared)
     ));
-    // Phase model variant renders too.
-    let mut s = small_noise(1);
-    s.lighting.phase = PhaseModel::DualLobeHg {
+}
+
+#[test]
+fn the_dual_lobe_phase_model_renders_and_changes_the_light() {
+    let view = standard_views()[1]; // low sun: the phase function matters most
+    let render = |phase| {
+        let mut s = quiet(small_noise(1));
+        s.lighting.phase = phase;
+        let mut h = headless(s);
+        render_view(&mut h, &view).1
+    };
+    let default = render(PhaseModel::default());
+    let dual = render(PhaseModel::DualLobeHg {
         g_forward: 0.8,
         g_backward: -0.3,
         forward_weight: 0.7,
-    };
-    r.set_settings(s).unwrap();
+    });
+    assert!(dual.iter().flatten().all(|v| v.is_finite()));
+    let diff = default
+        .iter()
+        .zip(&dual)
+        .map(|(a, b)| (a[0] - b[0]).abs())
+        .sum::<f32>()
+        / dual.len() as f32;
+    assert!(
+        diff > 1e-4,
+        "the phase model did not reach the shader (mean change {diff})"
+    );
 }
 
 // ---- reduced-resolution tracing ----------------------------------------------------------------

@@ -202,7 +202,12 @@ fn each_optimisation_stays_close_to_the_plain_march() {
             );
         }
         if name == "light_lod" {
-            assert!(stats.mean_light_samples <= plain_samples.mean_light_samples);
+            // Part of this view's clouds lie beyond 5 km, where fewer, longer light steps start
+            // (measured: 23.4 against 24.2 light samples per ray).
+            assert!(
+                stats.mean_light_samples < 0.98 * plain_samples.mean_light_samples,
+                "light LOD saved nothing: {stats:?} vs {plain_samples:?}"
+            );
         }
     }
 }
@@ -245,4 +250,108 @@ fn tiny_outputs_and_size_changes_work_with_temporal() {
             assert!(out.iter().flatten().all(|v| v.is_finite()), "{w}x{hh}: NaN");
         }
     }
+}
+
+#[test]
+fn noise_lod_engages_with_full_size_volumes_and_stays_close() {
+    // The tests' small volumes have texels wider than any pixel footprint here, so mip 0 is
+    // always right and the switch cannot show: use the default 128³ / 32³ volumes.
+    let view = standard_views()[0];
+    let plain = {
+        let mut s = quiet(Settings::default());
+        s.march.noise_lod = false;
+        s
+    };
+    let mut h = headless(plain.clone());
+    show(&mut h, &view, 0.0);
+    let reference = h.read_output().unwrap();
+    let mut s = plain;
+    s.march.noise_lod = true;
+    h.renderer_mut().set_settings(s).unwrap();
+    show(&mut h, &view, 0.0);
+    let got = h.read_output().unwrap();
+    let mean = mean_difference(&reference, &got);
+    assert!(mean > 1e-6, "noise LOD changed nothing: it did not engage");
+    assert!(mean < 0.01, "noise LOD moved the image by {mean}");
+}
+
+#[test]
+fn low_level_half_resolution_settles_to_its_own_full_march() {
+    let view = standard_views()[0];
+    // Low: half-resolution grid, 1 in 16 per frame, its own short march; jitter off so that
+    // every sample of a pixel agrees and the history must settle to the plain march of the
+    // same grid.
+    let mut low = small_noise(1);
+    nimbus::Quality::Low.apply(&mut low);
+    low.march.jitter = false;
+    let full = {
+        let mut s = low.clone();
+        s.march.temporal = Temporal::OFF;
+        let mut h = headless(s);
+        show(&mut h, &view, 0.0);
+        h.read_clouds().unwrap()
+    };
+    let mut h = headless(low);
+    for _ in 0..16 {
+        show(&mut h, &view, 0.0);
+    }
+    let settled = h.read_clouds().unwrap();
+    assert_eq!(
+        settled.len(),
+        full.len(),
+        "both on the half-resolution grid"
+    );
+    assert_eq!(settled.len() as u32, W.div_ceil(2) * H.div_ceil(2));
+    let worst = worst_difference(&full, &settled);
+    assert!(worst < 2e-3, "Low settled {worst} away from its full march");
+    // Settled means still: two more frames change nothing.
+    show(&mut h, &view, 0.0);
+    show(&mut h, &view, 0.0);
+    assert!(worst_difference(&settled, &h.read_clouds().unwrap()) < 1e-3);
+    // And the upsampled output is close to the full-resolution plain march.
+    let full_res = {
+        let mut h = headless(quiet(small_noise(1)));
+        show(&mut h, &view, 0.0);
+        h.read_output().unwrap()
+    };
+    let mean = mean_difference(&full_res, &h.read_output().unwrap());
+    assert!(
+        mean < 0.03,
+        "Low's output is {mean} away from the full march"
+    );
+}
+
+#[test]
+fn with_jitter_on_the_history_averages_toward_the_full_march() {
+    let view = standard_views()[0];
+    // The reference: many jittered full marches averaged (every pixel, every frame).
+    let mut r = headless({
+        let mut s = small_noise(1);
+        s.march.temporal = Temporal::OFF;
+        s
+    });
+    let mut reference = vec![[0.0f32; 4]; (W * H) as usize];
+    let frames = 16;
+    for _ in 0..frames {
+        show(&mut r, &view, 0.0);
+        for (a, b) in reference.iter_mut().zip(r.read_output().unwrap()) {
+            for c in 0..4 {
+                a[c] += b[c] / frames as f32;
+            }
+        }
+    }
+    let one_jittered = r.read_output().unwrap();
+    // The default level (1 in 16, jitter on) after 64 frames: 4 samples per pixel.
+    let mut h = headless(small_noise(1));
+    for _ in 0..64 {
+        show(&mut h, &view, 0.0);
+    }
+    let settled = h.read_output().unwrap();
+    let noise_of_one = mean_difference(&reference, &one_jittered);
+    let error = mean_difference(&reference, &settled);
+    assert!(
+        error < noise_of_one,
+        "accumulated history ({error}) no closer to the mean than one jittered frame ({noise_of_one})"
+    );
+    assert!(error < 0.01, "{error}");
 }

@@ -285,19 +285,85 @@ fn check_size(width: u32, height: u32) -> FfiResult {
     Ok(())
 }
 
+/// Everything a context creation decodes from its descriptor before touching a device: the
+/// ABI version, the settings chain (validated) and the window handle.
+fn decode_desc(
+    desc: &NimbusContextDesc,
+) -> FfiResult<(Settings, Option<wgpu::SurfaceTargetUnsafe>)> {
+    let minor = check_abi_version(desc.abi_version)?;
+    let settings = settings_from_chain(desc.next, minor)?;
+    settings.validate()?;
+    // SAFETY: checked for NULL; the caller guarantees validity otherwise.
+    let window = unsafe { desc.window.as_ref() };
+    let target = match window {
+        Some(w) => {
+            check_size(desc.width, desc.height)?;
+            Some(window_target(w)?)
+        }
+        None => None,
+    };
+    Ok((settings, target))
+}
+
+/// A C frame as Rust frame inputs, checked as `Renderer::prepare` checks them.
+fn decode_frame(frame: &NimbusFrame) -> FfiResult<FrameInputs> {
+    check_chain(frame.next, &[])?;
+    let known = NIMBUS_DEPTH_REVERSED_Z | NIMBUS_DEPTH_INFINITE_FAR | NIMBUS_DEPTH_GL_CLIP_Z;
+    if frame.depth_flags & !known != 0 {
+        return Err(FfiError::arg(format!(
+            "unknown depth flags {:#x}",
+            frame.depth_flags & !known
+        )));
+    }
+    let color = Vec3::from_array(frame.sun_color);
+    let inputs = FrameInputs {
+        camera: Camera {
+            view: Mat4::from_cols_array(&frame.view),
+            projection: Mat4::from_cols_array(&frame.projection),
+            depth: DepthConvention {
+                reversed_z: frame.depth_flags & NIMBUS_DEPTH_REVERSED_Z != 0,
+                infinite_far: frame.depth_flags & NIMBUS_DEPTH_INFINITE_FAR != 0,
+                gl_clip_z: frame.depth_flags & NIMBUS_DEPTH_GL_CLIP_Z != 0,
+            },
+        },
+        sun: Sun {
+            direction: Vec3::from_array(frame.sun_direction),
+            color: if color == Vec3::ZERO {
+                Vec3::ONE
+            } else {
+                color
+            },
+            illuminance: frame.sun_illuminance,
+        },
+        time: frame.time,
+    };
+    inputs.check()?;
+    Ok(inputs)
+}
+
+/// Entry points for the fuzz targets (tests/fuzz), built only with `--cfg fuzzing`: the C
+/// argument decoding of context creation and frames, inside the panic boundary, with no device.
+#[cfg(fuzzing)]
+#[doc(hidden)]
+pub mod fuzzing {
+    use super::*;
+
+    /// Decodes a context descriptor as `nimbus_context_create` does, up to the device.
+    ///
+    /// Safety: as for `nimbus_context_create` (valid chain and window pointers).
+    pub unsafe fn decode_desc(desc: &NimbusContextDesc) -> NimbusResult {
+        boundary(|| super::decode_desc(desc).map(|_| NIMBUS_OK), |_, _| {})
+    }
+
+    /// Decodes and checks a frame as `nimbus_context_render` does.
+    pub fn decode_frame(frame: &NimbusFrame) -> NimbusResult {
+        boundary(|| super::decode_frame(frame).map(|_| NIMBUS_OK), |_, _| {})
+    }
+}
+
 impl ContextInner {
     fn create(desc: &NimbusContextDesc) -> FfiResult<Self> {
-        let minor = check_abi_version(desc.abi_version)?;
-        let settings = settings_from_chain(desc.next, minor)?;
-        // SAFETY: checked for NULL; the caller guarantees validity otherwise.
-        let window = unsafe { desc.window.as_ref() };
-        let target = match window {
-            Some(w) => {
-                check_size(desc.width, desc.height)?;
-                Some(window_target(w)?)
-            }
-            None => None,
-        };
+        let (settings, target) = decode_desc(desc)?;
         // SAFETY: the header requires the window handles to outlive the context.
         let owned = unsafe { create_owned_device(target) }?;
         let errors = DeviceErrors::install(&owned.device);
@@ -354,37 +420,8 @@ impl ContextInner {
     }
 
     fn render(&mut self, frame: &NimbusFrame, targets: &NimbusTargets) -> FfiResult<NimbusResult> {
-        check_chain(frame.next, &[])?;
+        let inputs = decode_frame(frame)?;
         check_chain(targets.next, &[])?;
-        let known = NIMBUS_DEPTH_REVERSED_Z | NIMBUS_DEPTH_INFINITE_FAR | NIMBUS_DEPTH_GL_CLIP_Z;
-        if frame.depth_flags & !known != 0 {
-            return Err(FfiError::arg(format!(
-                "unknown depth flags {:#x}",
-                frame.depth_flags & !known
-            )));
-        }
-        let color = Vec3::from_array(frame.sun_color);
-        let inputs = FrameInputs {
-            camera: Camera {
-                view: Mat4::from_cols_array(&frame.view),
-                projection: Mat4::from_cols_array(&frame.projection),
-                depth: DepthConvention {
-                    reversed_z: frame.depth_flags & NIMBUS_DEPTH_REVERSED_Z != 0,
-                    infinite_far: frame.depth_flags & NIMBUS_DEPTH_INFINITE_FAR != 0,
-                    gl_clip_z: frame.depth_flags & NIMBUS_DEPTH_GL_CLIP_Z != 0,
-                },
-            },
-            sun: Sun {
-                direction: Vec3::from_array(frame.sun_direction),
-                color: if color == Vec3::ZERO {
-                    Vec3::ONE
-                } else {
-                    color
-                },
-                illuminance: frame.sun_illuminance,
-            },
-            time: frame.time,
-        };
         // SAFETY: texture pointers are NULL or live textures per the caller's contract.
         let scene = unsafe { targets.scene_color.as_ref() }
             .ok_or_else(|| FfiError::null("targets.scene_color"))?;

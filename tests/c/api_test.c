@@ -666,7 +666,92 @@ static void test_poison(void) {
     EXPECT(nimbus_set_log_callback(NULL, NULL, 0), NIMBUS_OK);
 }
 
-int main(void) {
+/* The cases that fail before any GPU device exists: what valgrind runs (a context creation
+ * JIT-compiles shaders in Mesa's llvmpipe, far too slow under valgrind). */
+static void test_without_device(void) {
+    NimbusContextDesc desc = {0};
+    NimbusContext *out = NULL;
+    NimbusChainedStruct unknown = {999, NULL};
+    NimbusSettingsExt s = {0};
+    NimbusQualityExt q = {0};
+    NimbusWindowHandle win = {0};
+    float buf[16];
+    size_t size = 0;
+    char small[4];
+    EXPECT(nimbus_context_create(NULL, &out), NIMBUS_ERROR_NULL_POINTER);
+    desc.abi_version = 0;
+    EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_ABI_VERSION);
+    desc.abi_version = NIMBUS_ABI_VERSION + 1;
+    EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_ABI_VERSION);
+    desc.abi_version = NIMBUS_ABI_VERSION;
+    EXPECT(nimbus_context_create(&desc, NULL), NIMBUS_ERROR_NULL_POINTER);
+    desc.next = &unknown;
+    EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_UNKNOWN_STRUCT);
+    s.chain.s_type = NIMBUS_STYPE_SETTINGS;
+    desc.next = &s.chain;
+    s.jitter = 9;
+    EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_ARGUMENT);
+    s.jitter = 0; s.planet_radius = -1e30f;
+    EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_SETTINGS);
+    s.planet_radius = 0.0f;
+    q.chain.s_type = NIMBUS_STYPE_QUALITY; q.quality = 8;
+    s.chain.next = &q.chain;
+    EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_ARGUMENT);
+    q.quality = 0;
+    desc.window = &win; desc.width = 64; desc.height = 64;
+    win.platform = 77;
+    EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_ARGUMENT);
+    win.platform = NIMBUS_PLATFORM_X11;
+    EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_NULL_POINTER);
+    TRUE(out == NULL);
+    EXPECT(nimbus_texture_create(NULL, NULL, NULL), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT(nimbus_texture_write(NULL, buf, sizeof buf), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT(nimbus_texture_read(NULL, buf, sizeof buf), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT(nimbus_texture_byte_size(NULL, &size), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT(nimbus_context_render(NULL, NULL, NULL), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT(nimbus_context_set_weather_toml(NULL, "x", 1, 0.0, 0.0), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT(nimbus_context_weather_state(NULL, 0.0, NULL), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT(nimbus_context_cancel_weather(NULL, 0.0), NIMBUS_ERROR_NULL_POINTER);
+    size = sizeof small;
+    EXPECT(nimbus_preset_write_toml(NIMBUS_PRESET_STORMY, 0, small, &size), NIMBUS_ERROR_INVALID_ARGUMENT);
+    EXPECT(nimbus_preset_write_toml(NIMBUS_PRESET_STORMY, 0, NULL, &size), NIMBUS_OK);
+    EXPECT(nimbus_set_log_callback(log_cb, NULL, 6), NIMBUS_ERROR_INVALID_ARGUMENT);
+    EXPECT(nimbus_set_log_callback(NULL, NULL, 0), NIMBUS_OK);
+    nimbus_context_destroy(NULL);
+    nimbus_texture_destroy(NULL);
+}
+
+/* One context, one frame, its textures, errors on it, destroy: the device path under valgrind. */
+static void test_one_frame(void) {
+    NimbusContextDesc desc = {0};
+    NimbusTexture *color, *out;
+    desc.abi_version = NIMBUS_ABI_VERSION;
+    EXPECT_ON(NULL, nimbus_context_create(&desc, &ctx), NIMBUS_OK);
+    if (!ctx) return;
+    color = make_texture(W, H, NIMBUS_FORMAT_RGBA16_FLOAT);
+    out = make_texture(W, H, NIMBUS_FORMAT_RGBA16_FLOAT);
+    EXPECT_ON(ctx, render_on(ctx, color, out, 0.0), NIMBUS_OK);
+    EXPECT_ON(ctx, render_on(ctx, color, NULL, 0.0), NIMBUS_ERROR_INVALID_TARGET); /* no window */
+    EXPECT_ON(ctx, nimbus_context_set_weather(ctx, NIMBUS_PRESET_STORMY, 0, 0.0, 1.0), NIMBUS_OK);
+    nimbus_texture_destroy(color);
+    nimbus_texture_destroy(out);
+    nimbus_context_destroy(ctx);
+    ctx = NULL;
+}
+
+int main(int argc, char **argv) {
+    if (argc > 1 && strcmp(argv[1], "--one-frame") == 0) {
+        test_one_frame();
+        printf("%d passed, %d failed\n", passed, failed);
+        return failed == 0 ? 0 : 1;
+    }
+    if (argc > 1 && strcmp(argv[1], "--no-device") == 0) {
+        test_results_and_versions();
+        test_without_device();
+        printf("bad-input cases: %d\n", bad_cases);
+        printf("%d passed, %d failed\n", passed, failed);
+        return failed == 0 ? 0 : 1;
+    }
     test_results_and_versions();
     test_create();
     if (!ctx) { printf("no context: %s\n", nimbus_context_last_error(NULL)); return 1; }
