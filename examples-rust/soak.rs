@@ -13,7 +13,10 @@
 //!
 //! Usage: cargo run --release --example soak -- [--frames 10000] [--size 32x18]
 //!        [--report-every 500] [--recreate-every 1000] [--check] [--max-growth-mb 24]
-//!        [--csv FILE]
+//!        [--csv FILE] [--trim]
+//!
+//! `--trim` also returns malloc's free arena memory right after each context is dropped (Nimbus
+//! does it itself when it next creates a device).
 
 use std::process::ExitCode;
 
@@ -29,6 +32,7 @@ struct Options {
     check: bool,
     max_growth_mb: f64,
     csv: Option<std::path::PathBuf>,
+    trim: bool,
 }
 
 fn parse_size(s: &str) -> Option<(u32, u32)> {
@@ -45,6 +49,7 @@ fn parse_args() -> Result<Options, String> {
         check: false,
         max_growth_mb: 24.0,
         csv: None,
+        trim: false,
     };
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
@@ -59,6 +64,7 @@ fn parse_args() -> Result<Options, String> {
                 o.size = parse_size(&v).ok_or(format!("bad size {v:?}"))?;
             }
             "--check" => o.check = true,
+            "--trim" => o.trim = true,
             "--max-growth-mb" => {
                 let v = value("--max-growth-mb")?;
                 o.max_growth_mb = v.parse().map_err(|_| format!("bad number {v:?}"))?;
@@ -67,7 +73,7 @@ fn parse_args() -> Result<Options, String> {
             "-h" | "--help" => {
                 println!(
                     "usage: soak [--frames N] [--size WxH] [--report-every N] \
-                     [--recreate-every N] [--check] [--max-growth-mb MB] [--csv FILE]"
+                     [--recreate-every N] [--check] [--max-growth-mb MB] [--csv FILE] [--trim]"
                 );
                 std::process::exit(0);
             }
@@ -147,6 +153,9 @@ fn run(o: &Options) -> Result<Vec<Report>, String> {
         if nimbus.is_none() || (o.recreate_every > 0 && i > 0 && i % o.recreate_every == 0) {
             // Drop the old context first, as a host would on a level change.
             drop(nimbus.take());
+            if o.trim {
+                nimbus::device::release_freed_memory();
+            }
             let mut h = Headless::new(settings()).map_err(err)?;
             h.resize(size.0, size.1).map_err(err)?;
             nimbus = Some(h);

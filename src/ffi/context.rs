@@ -625,6 +625,7 @@ pub unsafe extern "C" fn nimbus_context_destroy(ctx: *mut NimbusContext) {
                 let ctx = unsafe { Box::from_raw(ctx) };
                 let _ = ctx.inner.device.poll(wgpu::PollType::wait_indefinitely());
                 drop(ctx);
+                crate::device::release_freed_memory();
                 Ok(NIMBUS_OK)
             },
             |_, _| {},
@@ -880,10 +881,8 @@ pub unsafe extern "C" fn nimbus_context_weather_state(
             let out = out.as_mut().ok_or_else(|| FfiError::null("out"))?;
             check_chain(out.next, &[])?;
             if !time.is_finite() {
-                return Err(FfiError::arg(format!(
-                    "time must be finite, got {}",
-                    crate::validate::num(time)
-                )));
+                // Only NaN and the infinities reach here: they print short.
+                return Err(FfiError::arg(format!("time must be finite, got {time}")));
             }
             let s = inner.renderer.weather_state(time);
             *out = NimbusWeatherState {

@@ -212,6 +212,46 @@ mod tests {
         assert_eq!(NIMBUS_VERSION_PATCH, v(env!("CARGO_PKG_VERSION_PATCH")));
     }
 
+    /// The header's version macros, the ABI rule docs/c-api.md states and the code agree.
+    #[test]
+    fn header_docs_and_code_agree_on_versions_and_the_abi_rule() {
+        let root = env!("CARGO_MANIFEST_DIR");
+        let header = std::fs::read_to_string(format!("{root}/include/nimbus.h")).unwrap();
+        let define = |name: &str| -> u32 {
+            let line = header
+                .lines()
+                .find(|l| l.starts_with(&format!("#define {name} ")))
+                .unwrap_or_else(|| panic!("no #define {name} in nimbus.h"));
+            let value = line.rsplit(' ').next().unwrap();
+            // Either a number or the ABI expression of the other two.
+            value.parse().unwrap_or(u32::MAX)
+        };
+        assert_eq!(define("NIMBUS_VERSION_MAJOR"), NIMBUS_VERSION_MAJOR);
+        assert_eq!(define("NIMBUS_VERSION_MINOR"), NIMBUS_VERSION_MINOR);
+        assert_eq!(define("NIMBUS_VERSION_PATCH"), NIMBUS_VERSION_PATCH);
+        assert_eq!(define("NIMBUS_ABI_MIN_MINOR"), NIMBUS_ABI_MIN_MINOR);
+        let docs = std::fs::read_to_string(format!("{root}/docs/c-api.md")).unwrap();
+        let (major, min, ours) = (
+            NIMBUS_VERSION_MAJOR,
+            NIMBUS_ABI_MIN_MINOR,
+            NIMBUS_VERSION_MINOR,
+        );
+        let stated =
+            format!("This library is {major}.{ours} and serves {major}.{min} and {major}.{ours}.");
+        assert!(docs.contains(&stated), "docs/c-api.md must state: {stated}");
+        // The code: exactly the minors min..=ours of this major, never 0.
+        for minor in 0..ours + 3 {
+            let v = (major << 16) | minor;
+            let accepted = context::check_abi_version(v).is_ok();
+            assert_eq!(
+                accepted,
+                v != 0 && (min..=ours).contains(&minor),
+                "ABI {major}.{minor}"
+            );
+        }
+        assert!(context::check_abi_version(((major + 1) << 16) | ours).is_err());
+    }
+
     #[test]
     fn boundary_turns_panics_and_errors_into_codes() {
         let mut poisoned = false;
