@@ -15,6 +15,9 @@
 //!        [--report-every 500] [--recreate-every 1000] [--check] [--max-growth-mb 24]
 //!        [--csv FILE] [--trim]
 //!
+//! `--lose-device-every N` destroys the device every N frames (a simulated device loss): the
+//! frame must return `Error::DeviceLost`, and a new context takes over.
+//!
 //! `--trim` also returns malloc's free arena memory right after each context is dropped (Nimbus
 //! does it itself when it next creates a device).
 
@@ -33,6 +36,7 @@ struct Options {
     max_growth_mb: f64,
     csv: Option<std::path::PathBuf>,
     trim: bool,
+    lose_device_every: u32,
 }
 
 fn parse_size(s: &str) -> Option<(u32, u32)> {
@@ -50,6 +54,7 @@ fn parse_args() -> Result<Options, String> {
         max_growth_mb: 24.0,
         csv: None,
         trim: false,
+        lose_device_every: 0,
     };
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
@@ -65,6 +70,7 @@ fn parse_args() -> Result<Options, String> {
             }
             "--check" => o.check = true,
             "--trim" => o.trim = true,
+            "--lose-device-every" => o.lose_device_every = number(value("--lose-device-every")?)?,
             "--max-growth-mb" => {
                 let v = value("--max-growth-mb")?;
                 o.max_growth_mb = v.parse().map_err(|_| format!("bad number {v:?}"))?;
@@ -73,7 +79,7 @@ fn parse_args() -> Result<Options, String> {
             "-h" | "--help" => {
                 println!(
                     "usage: soak [--frames N] [--size WxH] [--report-every N] \
-                     [--recreate-every N] [--check] [--max-growth-mb MB] [--csv FILE] [--trim]"
+                     [--recreate-every N] [--check] [--max-growth-mb MB] [--csv FILE] [--trim] [--lose-device-every N]"
                 );
                 std::process::exit(0);
             }
@@ -183,6 +189,17 @@ fn run(o: &Options) -> Result<Vec<Report>, String> {
         }
         if i % 61 == 60 {
             h.renderer_mut().reset_history();
+        }
+        if o.lose_device_every > 0 && i % o.lose_device_every == o.lose_device_every - 1 {
+            // The device goes away (as on a driver reset): the frame must report it, and the
+            // next frame starts on a new context.
+            h.device().destroy();
+            match h.render(&frame_at(i, size)) {
+                Err(nimbus::Error::DeviceLost(_)) => {}
+                other => return Err(format!("frame {i} after a device loss: {other:?}")),
+            }
+            drop(nimbus.take());
+            continue;
         }
         h.render(&frame_at(i, size)).map_err(err)?;
         if (i + 1) % o.report_every == 0 {

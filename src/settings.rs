@@ -424,11 +424,14 @@ const MIN_FIRST_LIGHT_STEP: f32 = 0.01;
 /// field can be in range while the pair is not: 128 steps growing by 2 overflow r^n, the first
 /// step becomes 0 m and the clouds render fully sunlit.
 fn light_partition(steps: u32, growth: f32, distance: f32) -> Result<()> {
-    if growth <= 1.0001 {
-        return Ok(());
-    }
-    let total = growth.powf(steps as f32);
-    let first = distance * (growth - 1.0) / (total - 1.0);
+    // The shader's rule: uniform steps up to a growth of 1.0001 (found by fuzzing: a tiny
+    // light distance made even those 0 m long).
+    let (total, first) = if growth <= 1.0001 {
+        (1.0, distance / steps as f32)
+    } else {
+        let total = growth.powf(steps as f32);
+        (total, distance * (growth - 1.0) / (total - 1.0))
+    };
     if total.is_finite() && first >= MIN_FIRST_LIGHT_STEP {
         return Ok(());
     }
@@ -436,8 +439,8 @@ fn light_partition(steps: u32, growth: f32, distance: f32) -> Result<()> {
         "lighting.light_step_growth",
         format!(
             "{} with lighting.light_steps {steps} over lighting.light_distance {} m makes the \
-             first light step {} m (at least {MIN_FIRST_LIGHT_STEP} m is needed{}): lower the \
-             growth or the step count",
+             first light step {} m (at least {MIN_FIRST_LIGHT_STEP} m is needed{}): change the \
+             growth, the step count or the distance",
             crate::validate::num(growth),
             crate::validate::num(distance),
             if total.is_finite() {
@@ -678,6 +681,12 @@ mod tests {
         // Finite but uselessly short first steps are refused too.
         s.lighting.light_steps = 40;
         assert_eq!(refused(&s), "lighting.light_step_growth");
+        // Uniform steps too: a light distance this short leaves no step worth the name
+        // (the fuzzer's find: 1e-30 m over 8 steps was 0 m per step in f32).
+        let mut tiny = Settings::default();
+        tiny.lighting.light_step_growth = 1.0;
+        tiny.lighting.light_distance = 1e-30;
+        assert_eq!(refused(&tiny), "lighting.light_step_growth");
         // Every quality level's own light march passes.
         for q in [Quality::Low, Quality::Medium, Quality::High, Quality::Ultra] {
             let mut s = Settings::default();
