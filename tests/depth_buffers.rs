@@ -113,6 +113,11 @@ fn bytemuck_f32(v: &[f32]) -> &[u8] {
     unsafe { std::slice::from_raw_parts(v.as_ptr().cast(), std::mem::size_of_val(v)) }
 }
 
+/// Mean absolute difference of two images' channels.
+fn mean_difference(a: &[f32], b: &[f32]) -> f32 {
+    a.iter().zip(b).map(|(x, y)| (x - y).abs()).sum::<f32>() / a.len() as f32
+}
+
 fn halves(bytes: &[u8]) -> Vec<f32> {
     bytes
         .chunks_exact(2)
@@ -152,53 +157,30 @@ fn depth32float_attachments_occlude_like_r32float_in_both_conventions() {
     // A wall 6 km ahead: in the middle of the clouds of this view.
     let (d_std, d_rev) = (depth_at(&standard, 6_000.0), depth_at(&reversed, 6_000.0));
     let f32_std = halves(&gpu.render(&mut r, &std_frame, &gpu.r32_depth(d_std)));
-    let d32_std = halves(&gpu.render(
-        &mut r,
-        &std_frame,
-        &gpu.cleared_depth(wgpu::TextureFormat::Depth32Float, d_std),
-    ));
+    let mut with_attachment = |frame: &FrameInputs, format, value| {
+        halves(&gpu.render(&mut r, frame, &gpu.cleared_depth(format, value)))
+    };
+    let d32_std = with_attachment(&std_frame, wgpu::TextureFormat::Depth32Float, d_std);
     assert_eq!(
         d32_std, f32_std,
         "Depth32Float and R32Float hold the same values"
     );
-    let d32_rev = halves(&gpu.render(
-        &mut r,
-        &rev_frame,
-        &gpu.cleared_depth(wgpu::TextureFormat::Depth32Float, d_rev),
-    ));
-    let mean = d32_rev
-        .iter()
-        .zip(&f32_std)
-        .map(|(a, b)| (a - b).abs())
-        .sum::<f32>()
-        / f32_std.len() as f32;
+    let d32_rev = with_attachment(&rev_frame, wgpu::TextureFormat::Depth32Float, d_rev);
+    let mean = mean_difference(&d32_rev, &f32_std);
     assert!(
         mean < 1e-3,
         "reversed-Z Depth32Float differs by {mean} on average"
     );
     // The wall does clip the clouds: with the sky (far value) the image is brighter.
-    let sky = halves(&gpu.render(
-        &mut r,
-        &std_frame,
-        &gpu.cleared_depth(wgpu::TextureFormat::Depth32Float, 1.0),
-    ));
+    let sky = with_attachment(&std_frame, wgpu::TextureFormat::Depth32Float, 1.0);
     let sum = |v: &[f32]| v.iter().sum::<f32>();
     assert!(
         sum(&sky) > 1.05 * sum(&f32_std),
         "the 6 km wall hides no cloud"
     );
     // 24-bit depth with stencil, read through its depth aspect, agrees to its precision.
-    let d24 = halves(&gpu.render(
-        &mut r,
-        &std_frame,
-        &gpu.cleared_depth(wgpu::TextureFormat::Depth24PlusStencil8, d_std),
-    ));
-    let mean = d24
-        .iter()
-        .zip(&f32_std)
-        .map(|(a, b)| (a - b).abs())
-        .sum::<f32>()
-        / f32_std.len() as f32;
+    let d24 = with_attachment(&std_frame, wgpu::TextureFormat::Depth24PlusStencil8, d_std);
+    let mean = mean_difference(&d24, &f32_std);
     assert!(
         mean < 2e-3,
         "Depth24PlusStencil8 differs by {mean} on average"

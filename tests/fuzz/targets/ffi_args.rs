@@ -9,26 +9,17 @@ use std::ffi::CStr;
 
 use nimbus::ffi::*;
 
-struct Bytes<'a>(&'a [u8]);
+#[path = "bytes.rs"]
+mod bytes;
+use bytes::Bytes;
 
-impl Bytes<'_> {
-    fn u32(&mut self) -> u32 {
-        let mut b = [0u8; 4];
-        let n = self.0.len().min(4);
-        b[..n].copy_from_slice(&self.0[..n]);
-        self.0 = &self.0[n..];
-        u32::from_le_bytes(b)
-    }
-    fn f32(&mut self) -> f32 {
-        let v = self.u32();
-        if v % 3 == 0 {
-            f32::from_bits(v)
-        } else {
-            (v % 100_000) as f32
-        }
-    }
-    fn small(&mut self, n: u32) -> u32 {
-        self.u32() % n
+/// Raw bits a third of the time (NaN, infinities, denormals), else a plain integer value.
+fn number(b: &mut Bytes) -> f32 {
+    let v = b.u32();
+    if v % 3 == 0 {
+        f32::from_bits(v)
+    } else {
+        (v % 100_000) as f32
     }
 }
 
@@ -65,8 +56,8 @@ libfuzzer_sys::fuzz_target!(|data: &[u8]| {
         s.march_max_steps = b.small(1500);
         s.march_min_steps = b.small(1500);
         s.jitter = b.small(4);
-        s.max_distance = b.f32();
-        s.planet_radius = b.f32();
+        s.max_distance = number(&mut b);
+        s.planet_radius = number(&mut b);
     }
     // NimbusSettingsExt is the larger struct: a quality link read from it stays in bounds.
     let base = settings.as_mut_ptr();
@@ -129,13 +120,13 @@ libfuzzer_sys::fuzz_target!(|data: &[u8]| {
         view: [0.0; 16],
         projection: [0.0; 16],
         depth_flags: b.small(16),
-        sun_direction: [b.f32(), b.f32(), b.f32()],
-        sun_color: [b.f32(), b.f32(), b.f32()],
-        sun_illuminance: b.f32(),
-        time: b.f32() as f64,
+        sun_direction: [number(&mut b), number(&mut b), number(&mut b)],
+        sun_color: [number(&mut b), number(&mut b), number(&mut b)],
+        sun_illuminance: number(&mut b),
+        time: number(&mut b) as f64,
     };
     for v in frame.view.iter_mut().chain(frame.projection.iter_mut()) {
-        *v = b.f32() / 1000.0;
+        *v = number(&mut b) / 1000.0;
     }
     if b.small(2) == 0 {
         frame.next = base.cast();
