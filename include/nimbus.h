@@ -74,7 +74,7 @@
 /*
  Minor version.
  */
-#define NIMBUS_VERSION_MINOR 2
+#define NIMBUS_VERSION_MINOR 3
 
 /*
  Patch version.
@@ -271,6 +271,11 @@
 #define NIMBUS_FORMAT_R32_FLOAT 5
 
 /*
+ `s_type` of `NimbusVulkanDeviceExt` (chain it to `NimbusContextDesc.next`). Since ABI 0.3.
+ */
+#define NIMBUS_STYPE_VULKAN_DEVICE 3
+
+/*
  The result of every fallible call. Values are stable forever; new codes take new values in
  their block:
 
@@ -346,6 +351,11 @@ enum NimbusResult
    */
   NIMBUS_ERROR_SURFACE = -12,
   /*
+   The host's Vulkan instance or device lacks an API version, extension, feature or queue
+   Nimbus needs, or describes it inconsistently (since ABI 0.3; the message names it).
+   */
+  NIMBUS_ERROR_VULKAN_REQUIREMENT = -13,
+  /*
    A panic inside Nimbus was caught; the context is now poisoned.
    */
   NIMBUS_ERROR_PANIC = -100,
@@ -372,6 +382,12 @@ typedef struct NimbusContext NimbusContext;
  An opaque texture handle (see `nimbus_texture_create`).
  */
 typedef struct NimbusTexture NimbusTexture;
+
+/*
+ What a physical device needs enabled for Nimbus (see the `nimbus_vulkan_device_requirements_*`
+ calls). Since ABI 0.3.
+ */
+typedef struct NimbusVulkanDeviceRequirements NimbusVulkanDeviceRequirements;
 
 /*
  Header of every chained extension struct: put it first, set `s_type`, link with `next`.
@@ -560,6 +576,153 @@ typedef struct NimbusTextureDesc {
 } NimbusTextureDesc;
 
 /*
+ A Vulkan function pointer (`PFN_vkVoidFunction`).
+ */
+typedef void (*NimbusVkVoidFunction)(void);
+
+/*
+ `vkGetInstanceProcAddr`: pass `(NimbusVkGetInstanceProcAddr)vkGetInstanceProcAddr`.
+ */
+typedef NimbusVkVoidFunction (*NimbusVkGetInstanceProcAddr)(void *instance, const char *name);
+
+/*
+ The host's `VkInstance`, as it created it. Since ABI 0.3.
+ */
+typedef struct NimbusVulkanInstance {
+  /*
+   The loader's (or the host's) `vkGetInstanceProcAddr`. Required.
+   */
+  NimbusVkGetInstanceProcAddr get_instance_proc_addr;
+  /*
+   The `VkInstance`.
+   */
+  void *instance;
+  /*
+   `VkApplicationInfo.apiVersion` given to `vkCreateInstance` (at least Vulkan 1.1).
+   */
+  uint32_t api_version;
+  /*
+   How many names `extensions` holds.
+   */
+  uint32_t extension_count;
+  /*
+   The `ppEnabledExtensionNames` given to `vkCreateInstance`.
+   */
+  const char *const *extensions;
+} NimbusVulkanInstance;
+
+/*
+ One of the host's images for `nimbus_context_render_vulkan`. Since ABI 0.3.
+ */
+typedef struct NimbusVulkanImage {
+  /*
+   The `VkImage` (2D, one sample); 0 for "none" (depth only: nothing occludes).
+   */
+  uint64_t image;
+  /*
+   Its `VkFormat`. Color: `VK_FORMAT_R8G8B8A8_UNORM`, `R8G8B8A8_SRGB`, `B8G8R8A8_UNORM`,
+   `B8G8R8A8_SRGB`, `A2B10G10R10_UNORM_PACK32`, `B10G11R11_UFLOAT_PACK32`,
+   `R16G16B16A16_SFLOAT`. Depth (read through its depth aspect): `D32_SFLOAT`,
+   `D24_UNORM_S8_UINT`, `D32_SFLOAT_S8_UINT`, `D16_UNORM`.
+   */
+  uint32_t format;
+  /*
+   Width of mip 0 in pixels.
+   */
+  uint32_t width;
+  /*
+   Height of mip 0 in pixels.
+   */
+  uint32_t height;
+  /*
+   The image's mip count (0 counts as 1).
+   */
+  uint32_t mip_levels;
+  /*
+   The image's layer count (0 counts as 1).
+   */
+  uint32_t array_layers;
+  /*
+   The mip Nimbus uses: must be 0.
+   */
+  uint32_t mip_level;
+  /*
+   The layer Nimbus uses.
+   */
+  uint32_t array_layer;
+  /*
+   The `VkImageUsageFlags` it was created with. Color needs `COLOR_ATTACHMENT`, depth
+   `SAMPLED`, and each layout the usage docs/c-api.md lists for it.
+   */
+  uint32_t usage;
+  /*
+   The `VkImageLayout` the used mip and layer are in when Nimbus's work runs.
+   */
+  uint32_t layout;
+  /*
+   The layout to leave them in; 0 (`VK_IMAGE_LAYOUT_UNDEFINED`): the same as `layout`.
+   */
+  uint32_t final_layout;
+} NimbusVulkanImage;
+
+/*
+ A semaphore Nimbus's submission waits on or signals. Since ABI 0.3.
+ */
+typedef struct NimbusVulkanSemaphore {
+  /*
+   The `VkSemaphore`.
+   */
+  uint64_t semaphore;
+  /*
+   A timeline semaphore's value; 0 for a binary semaphore.
+   */
+  uint64_t value;
+  /*
+   Waits: the `VkPipelineStageFlags` the wait blocks (0: `ALL_COMMANDS`). Ignored for
+   signals.
+   */
+  uint32_t stage;
+  /*
+   Must be 0.
+   */
+  uint32_t reserved;
+} NimbusVulkanSemaphore;
+
+/*
+ The host's images and semaphores of one frame. Since ABI 0.3.
+ */
+typedef struct NimbusVulkanTargets {
+  /*
+   Chained extensions, or NULL.
+   */
+  const struct NimbusChainedStruct *next;
+  /*
+   The scene color: the clouds are composited into it in place. Required.
+   */
+  struct NimbusVulkanImage color;
+  /*
+   The scene depth in the frame's depth convention; `image` 0: nothing occludes.
+   */
+  struct NimbusVulkanImage depth;
+  /*
+   How many semaphores `waits` holds (at most 16).
+   */
+  uint32_t wait_count;
+  /*
+   Waited on before Nimbus's work.
+   */
+  const struct NimbusVulkanSemaphore *waits;
+  /*
+   How many semaphores `signals` holds (at most 16).
+   */
+  uint32_t signal_count;
+  /*
+   Signalled when Nimbus's work is done.
+   */
+  const struct NimbusVulkanSemaphore *signals;
+} NimbusVulkanTargets;
+
+/*
  Settings extension (`s_type = NIMBUS_STYPE_SETTINGS`). Zero in any field means its default.
  */
 typedef struct NimbusSettingsExt {
@@ -611,6 +774,74 @@ typedef struct NimbusQualityExt {
    */
   uint32_t quality;
 } NimbusQualityExt;
+
+/*
+ The host's queue lock or unlock, called with `lock_user_data`.
+ */
+typedef void (*NimbusQueueLockFn)(void *user_data);
+
+/*
+ Chained to `NimbusContextDesc.next`: create the context on the host's own Vulkan device
+ (`desc.window` must be NULL). Every handle must outlive the context. Since ABI 0.3.
+ */
+typedef struct NimbusVulkanDeviceExt {
+  /*
+   `s_type` = `NIMBUS_STYPE_VULKAN_DEVICE`.
+   */
+  struct NimbusChainedStruct chain;
+  /*
+   The instance the device was created from.
+   */
+  struct NimbusVulkanInstance instance;
+  /*
+   The `VkPhysicalDevice`.
+   */
+  void *physical_device;
+  /*
+   The `VkDevice`.
+   */
+  void *device;
+  /*
+   How many names `extensions` holds.
+   */
+  uint32_t extension_count;
+  /*
+   The device extensions given to `vkCreateDevice`.
+   */
+  const char *const *extensions;
+  /*
+   The `VkPhysicalDeviceFeatures2` (itself, with its `pNext` chain) given to
+   `vkCreateDevice` as `VkDeviceCreateInfo.pNext`. Required: Vulkan cannot be asked which
+   features a device has enabled. Read only during `nimbus_context_create`.
+   */
+  const void *enabled_features;
+  /*
+   The `VkQueue` Nimbus submits to (`vkGetDeviceQueue(device, family, index)`).
+   */
+  void *queue;
+  /*
+   Its family: must be 0 (wgpu 30 drives queue family 0 only).
+   */
+  uint32_t queue_family_index;
+  /*
+   Its index in the family.
+   */
+  uint32_t queue_index;
+  /*
+   Optional, with `unlock_queue` (both or neither): called before every `vkQueueSubmit`
+   and `vkQueueWaitIdle` Nimbus makes on the queue, from the thread making the Nimbus call.
+   It must not call into Nimbus.
+   */
+  NimbusQueueLockFn lock_queue;
+  /*
+   Called after each such call.
+   */
+  NimbusQueueLockFn unlock_queue;
+  /*
+   Passed to both callbacks.
+   */
+  void *lock_user_data;
+} NimbusVulkanDeviceExt;
 
 
 
@@ -826,6 +1057,101 @@ NimbusResult nimbus_texture_byte_size(const struct NimbusTexture *tex, size_t *o
  Safety: `tex` must be NULL or a texture from `nimbus_texture_create`, not yet destroyed.
  */
 void nimbus_texture_destroy(struct NimbusTexture *tex);
+
+/*
+ The instance extensions Nimbus needs: enable them (with yours) at `vkCreateInstance`,
+ with `apiVersion` at least `VK_API_VERSION_1_1`. Two-call idiom: with `names` NULL, writes
+ the count to `*count`; else `*count` must be at least that and the names are written. The
+ strings are static: never free them. Since ABI 0.3.
+
+ Safety: `get_instance_proc_addr` must be `vkGetInstanceProcAddr` or NULL; `count` NULL or
+ writable; `names` NULL or `*count` writable slots.
+ */
+NimbusResult nimbus_vulkan_instance_extensions(NimbusVkGetInstanceProcAddr get_instance_proc_addr,
+                                               uint32_t *count,
+                                               const char **names);
+
+/*
+ The requirements of `physical_device` (a `VkPhysicalDevice` of `instance`), for
+ `vkCreateDevice`. Fails with `NIMBUS_ERROR_VULKAN_REQUIREMENT` when the instance lacks an
+ extension Nimbus needs or wgpu cannot use the device. Destroy it with
+ `nimbus_vulkan_device_requirements_destroy` after `vkCreateDevice`. Since ABI 0.3.
+
+ Safety: pointers NULL or valid; the handles live.
+ */
+NimbusResult nimbus_vulkan_device_requirements_create(const struct NimbusVulkanInstance *instance,
+                                                      void *physical_device,
+                                                      struct NimbusVulkanDeviceRequirements **out);
+
+/*
+ The device extensions to enable (two-call idiom as `nimbus_vulkan_instance_extensions`;
+ static strings). Since ABI 0.3.
+
+ Safety: `req` NULL or live; `count` and `names` as for `nimbus_vulkan_instance_extensions`.
+ */
+NimbusResult nimbus_vulkan_device_requirements_extensions(const struct NimbusVulkanDeviceRequirements *req,
+                                                          uint32_t *count,
+                                                          const char **names);
+
+/*
+ Merges Nimbus's features into the host's feature chain. `features2` is the host's
+ `VkPhysicalDeviceFeatures2` (sType set; `pNext` its own feature structs or NULL), which the
+ host then gives to `vkCreateDevice` as `VkDeviceCreateInfo.pNext` with `pEnabledFeatures`
+ NULL. Bits go into structs already in the chain (promoted features into the
+ `VkPhysicalDeviceVulkan11/12/13Features` the host chains); structs with no home there are
+ appended at the end of the chain and belong to `req`: keep `req` alive as long as the chain
+ is used, i.e. through `vkCreateDevice` and every `nimbus_context_create` that is given the
+ chain as `NimbusVulkanDeviceExt.enabled_features`. Since ABI 0.3.
+
+ Safety: `req` NULL or live; `features2` NULL or a valid, writable chain.
+ */
+NimbusResult nimbus_vulkan_device_requirements_merge_features(struct NimbusVulkanDeviceRequirements *req,
+                                                              void *features2);
+
+/*
+ The queue family Nimbus's queue must come from (0 with wgpu 30; it supports graphics and
+ compute). Since ABI 0.3.
+
+ Safety: `req` NULL or live; `family` NULL or writable.
+ */
+NimbusResult nimbus_vulkan_device_requirements_queue_family(const struct NimbusVulkanDeviceRequirements *req,
+                                                            uint32_t *family);
+
+/*
+ Destroys requirements and the feature structs they appended to a chain: after this the
+ chain they were merged into must not be used again. NULL is a no-op. Since ABI 0.3.
+
+ Safety: `req` NULL or from `nimbus_vulkan_device_requirements_create`, destroyed once.
+ */
+void nimbus_vulkan_device_requirements_destroy(struct NimbusVulkanDeviceRequirements *req);
+
+/*
+ Composites the clouds into the host's color image in place, reading its depth image, on
+ the host's queue (a context created with `NimbusVulkanDeviceExt`). The work waits on
+ `targets->waits`, signals `targets->signals`, and is ordered after the host's earlier
+ submissions on that queue and before its later ones: it begins and ends with a global
+ memory barrier (ALL_COMMANDS / MEMORY_WRITE to ALL_COMMANDS / MEMORY_READ | MEMORY_WRITE).
+ Both images are left in their final layouts. Checks fail before anything is submitted.
+ Touches the queue (one `vkQueueSubmit`, under the lock callbacks when given). Since ABI 0.3.
+
+ Safety: `ctx` NULL or live; `frame` and `targets` NULL or valid; the images live, created
+ as described and in the described layouts when the work runs, and alive until it has
+ finished (wait on a signalled semaphore, a later fence on the queue, or
+ `nimbus_context_release_vulkan_images`).
+ */
+NimbusResult nimbus_context_render_vulkan(struct NimbusContext *ctx,
+                                          const struct NimbusFrame *frame,
+                                          const struct NimbusVulkanTargets *targets);
+
+/*
+ Waits for Nimbus's GPU work and drops its wrappers of the host's images. Nimbus keeps them
+ between frames (so nothing is made per frame): call this before destroying or re-creating
+ any image handed to `nimbus_context_render_vulkan`. `nimbus_context_destroy` does the same.
+ Touches the queue (a wait). Since ABI 0.3.
+
+ Safety: `ctx` NULL or live.
+ */
+NimbusResult nimbus_context_release_vulkan_images(struct NimbusContext *ctx);
 
 #ifdef __cplusplus
 }  /* extern "C" */

@@ -22,6 +22,15 @@ pub struct OwnedDevice {
     pub surface: Option<wgpu::Surface<'static>>,
 }
 
+/// The wgpu features Nimbus asks for where the adapter has them: GPU timing, and the render
+/// formats `Depth32FloatStencil8` and `Rg11b10Ufloat` need.
+pub(crate) fn wanted_features(available: wgpu::Features) -> wgpu::Features {
+    available
+        & (wgpu::Features::TIMESTAMP_QUERY
+            | wgpu::Features::DEPTH32FLOAT_STENCIL8
+            | wgpu::Features::RG11B10UFLOAT_RENDERABLE)
+}
+
 /// Returns memory the C allocator holds free to the system (glibc: `malloc_trim`; elsewhere
 /// nothing). A device's driver worker threads (llvmpipe starts its own per device) each get a
 /// malloc arena, and what they free stays in it after they end: without a trim every device
@@ -71,7 +80,7 @@ pub unsafe fn create_owned_device(
             "{e} (on Linux without a GPU, install Mesa's software Vulkan: mesa-vulkan-drivers)"
         ))
     })?;
-    let features = adapter.features() & wgpu::Features::TIMESTAMP_QUERY;
+    let features = wanted_features(adapter.features());
     let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
         label: Some("nimbus"),
         required_features: features,

@@ -73,6 +73,11 @@ pub enum Error {
     /// made on it is unusable: make a new device (or `Headless`).
     #[error("the GPU device was lost ({0}); everything made on it is unusable")]
     DeviceLost(String),
+    /// The host's Vulkan instance, device or queue lacks what Nimbus needs (an API version,
+    /// an extension, a feature, a usable queue family), or describes it inconsistently. The
+    /// message names what is missing.
+    #[error("host Vulkan device: {0}")]
+    Vulkan(String),
     /// Reading a texture back to the CPU failed.
     #[error("GPU readback failed: {0}")]
     Readback(String),

@@ -33,6 +33,9 @@ pub mod lighting;
 pub mod renderer;
 pub mod settings;
 mod validate;
+/// Nimbus on the host's own Vulkan device and images (Vulkan targets only).
+#[cfg(not(any(target_vendor = "apple", target_arch = "wasm32")))]
+pub mod vulkan;
 pub mod weather;
 
 pub use error::{Error, Result};

@@ -26,11 +26,12 @@ pub const OUTPUT_FORMATS: &[wgpu::TextureFormat] = &[
     F::Bgra8Unorm,
     F::Bgra8UnormSrgb,
     F::Rgb10a2Unorm,
+    F::Rg11b10Ufloat,
     F::Rgba16Float,
     F::Rgba32Float,
 ];
 const OUTPUT_NAMES: &str =
-    "Rgba8Unorm(Srgb), Bgra8Unorm(Srgb), Rgb10a2Unorm, Rgba16Float, Rgba32Float (not in place)";
+    "Rgba8Unorm(Srgb), Bgra8Unorm(Srgb), Rgb10a2Unorm, Rg11b10Ufloat (needs Features::RG11B10UFLOAT_RENDERABLE), Rgba16Float, Rgba32Float (not in place)";
 
 /// Scene-depth formats: depth formats, or `R32Float` holding clip-space depth.
 pub const DEPTH_FORMATS: &[wgpu::TextureFormat] = &[
@@ -685,6 +686,13 @@ impl Renderer {
     }
 
     /// Drops the cached bind groups, releasing the views (and textures) they hold.
+    /// Drops the cached bind groups that hold the host's target views (scene depth, scene
+    /// color). Call it before destroying textures whose views were passed to `encode`, so no
+    /// cached bind group keeps them alive; the next frame makes new ones.
+    pub fn forget_target_views(&mut self) {
+        self.clear_bind_groups();
+    }
+
     fn clear_bind_groups(&mut self) {
         for b in [
             &mut self.march_depth.binds,

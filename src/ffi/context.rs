@@ -1,4 +1,5 @@
-//! The context: a device of Nimbus's own (headless or presenting to a window) and a renderer.
+//! The context: a device of Nimbus's own (headless or presenting to a window) or the host's
+//! Vulkan device, and a renderer.
 
 use std::ffi::{c_char, CString};
 use std::num::NonZeroIsize;
@@ -43,6 +44,9 @@ pub(crate) struct ContextInner {
     renderer: Renderer,
     errors: DeviceErrors,
     presenter: Option<Presenter>,
+    /// The host's Vulkan device and the wrappers of its images, for a context created with
+    /// `NimbusVulkanDeviceExt`.
+    vulkan: Option<super::vulkan::VulkanHost>,
     adapter_name: CString,
 }
 
@@ -145,9 +149,14 @@ const V0_1_QUALITY_OFFSET: usize = 44;
 
 /// The settings a creation chain asks for. `abi_minor` is the header's minor version.
 fn settings_from_chain(next: *const NimbusChainedStruct, abi_minor: u32) -> FfiResult<Settings> {
-    check_chain(next, &[NIMBUS_STYPE_SETTINGS, NIMBUS_STYPE_QUALITY])?;
+    let kinds = [
+        NIMBUS_STYPE_SETTINGS,
+        NIMBUS_STYPE_QUALITY,
+        NIMBUS_STYPE_VULKAN_DEVICE,
+    ];
+    check_chain(next, &kinds)?;
     let links = links(next);
-    for kind in [NIMBUS_STYPE_SETTINGS, NIMBUS_STYPE_QUALITY] {
+    for kind in kinds {
         if links.iter().filter(|(t, _)| *t == kind).count() > 1 {
             return Err(FfiError::new(
                 NIMBUS_ERROR_UNKNOWN_STRUCT,
@@ -287,14 +296,33 @@ fn check_size(width: u32, height: u32) -> FfiResult {
 
 /// Everything a context creation decodes from its descriptor before touching a device: the
 /// ABI version, the settings chain (validated) and the window handle.
-fn decode_desc(
-    desc: &NimbusContextDesc,
-) -> FfiResult<(Settings, Option<wgpu::SurfaceTargetUnsafe>)> {
+fn decode_desc(desc: &NimbusContextDesc) -> FfiResult<DecodedDesc> {
     let minor = check_abi_version(desc.abi_version)?;
     let settings = settings_from_chain(desc.next, minor)?;
     settings.validate()?;
     // SAFETY: checked for NULL; the caller guarantees validity otherwise.
     let window = unsafe { desc.window.as_ref() };
+    let vulkan = links(desc.next)
+        .into_iter()
+        .find(|(t, _)| *t == NIMBUS_STYPE_VULKAN_DEVICE)
+        .map(|(_, p)| p as *const NimbusVulkanDeviceExt);
+    if let Some(ext) = vulkan {
+        if window.is_some() {
+            return Err(FfiError::arg(
+                "desc.window must be NULL with NimbusVulkanDeviceExt: a context on the host's \
+                 device composites into the host's images and does not present",
+            ));
+        }
+        if minor < 3 {
+            return Err(FfiError::new(
+                NIMBUS_ERROR_UNKNOWN_STRUCT,
+                "NimbusVulkanDeviceExt needs a header of ABI 0.3 or newer",
+            ));
+        }
+        // SAFETY: the chain link is a NimbusVulkanDeviceExt (its s_type) per the caller.
+        let host = unsafe { super::vulkan::host_device(&*ext) }?;
+        return Ok((settings, None, Some(host)));
+    }
     let target = match window {
         Some(w) => {
             check_size(desc.width, desc.height)?;
@@ -302,11 +330,18 @@ fn decode_desc(
         }
         None => None,
     };
-    Ok((settings, target))
+    Ok((settings, target, None))
 }
 
+/// What a creation descriptor asks for: settings, a window or the host's Vulkan device.
+type DecodedDesc = (
+    Settings,
+    Option<wgpu::SurfaceTargetUnsafe>,
+    Option<crate::vulkan::HostDevice>,
+);
+
 /// A C frame as Rust frame inputs, checked as `Renderer::prepare` checks them.
-fn decode_frame(frame: &NimbusFrame) -> FfiResult<FrameInputs> {
+pub(crate) fn decode_frame(frame: &NimbusFrame) -> FfiResult<FrameInputs> {
     check_chain(frame.next, &[])?;
     let known = NIMBUS_DEPTH_REVERSED_Z | NIMBUS_DEPTH_INFINITE_FAR | NIMBUS_DEPTH_GL_CLIP_Z;
     if frame.depth_flags & !known != 0 {
@@ -363,60 +398,64 @@ pub mod fuzzing {
 
 impl ContextInner {
     fn create(desc: &NimbusContextDesc) -> FfiResult<Self> {
-        let (settings, target) = decode_desc(desc)?;
-        // SAFETY: the header requires the window handles to outlive the context.
-        let owned = unsafe { create_owned_device(target) }?;
-        let errors = DeviceErrors::install(&owned.device);
-        let presenter = match owned.surface {
-            Some(surface) => {
-                let caps = surface.get_capabilities(&owned.adapter);
-                let format = caps
-                    .formats
-                    .iter()
-                    .copied()
-                    .find(|f| f.is_srgb() && crate::renderer::OUTPUT_FORMATS.contains(f))
-                    .or_else(|| {
-                        caps.formats
-                            .iter()
-                            .copied()
-                            .find(|f| crate::renderer::OUTPUT_FORMATS.contains(f))
-                    })
-                    .ok_or_else(|| {
-                        FfiError::new(
-                            NIMBUS_ERROR_SURFACE,
-                            format!("no supported surface format in {:?}", caps.formats),
-                        )
-                    })?;
-                let mut config = surface
-                    .get_default_config(&owned.adapter, desc.width, desc.height)
-                    .ok_or_else(|| {
-                        FfiError::new(
-                            NIMBUS_ERROR_SURFACE,
-                            "the adapter cannot present to this window",
-                        )
-                    })?;
-                config.format = format;
-                config.present_mode = wgpu::PresentMode::Fifo;
-                config.view_formats = vec![];
-                gpu_scope(&owned.device, || surface.configure(&owned.device, &config))?;
-                Some(Presenter { surface, config })
+        let (settings, target, host) = decode_desc(desc)?;
+        let (device, queue, info, presenter, vulkan) = match host {
+            Some(host) => {
+                // SAFETY: the header requires the host's handles to be live, consistent and to
+                // outlive the context.
+                let (adopted, frame) = unsafe { super::vulkan::adopt(&host) }?;
+                let info = adopted.adapter.get_info();
+                let (device, queue) = (adopted.device.clone(), adopted.queue.clone());
+                let host = super::vulkan::VulkanHost {
+                    frame,
+                    _adopted: adopted,
+                };
+                (device, queue, info, None, Some(host))
             }
-            None => None,
+            None => {
+                // SAFETY: the header requires the window handles to outlive the context.
+                let mut owned = unsafe { create_owned_device(target) }?;
+                let presenter = match owned.surface.take() {
+                    Some(surface) => Some(presenter(&owned, surface, desc)?),
+                    None => None,
+                };
+                (owned.device, owned.queue, owned.info, presenter, None)
+            }
         };
-        let renderer = Renderer::new(&owned.device, &owned.queue, settings)?;
+        let errors = DeviceErrors::install(&device);
+        let renderer = Renderer::new(&device, &queue, settings)?;
         Ok(Self {
             id: NEXT_CONTEXT_ID.fetch_add(1, Ordering::Relaxed),
             alive: Arc::new(()),
             adapter_name: CString::new(
-                format!("{} ({:?})", owned.info.name, owned.info.backend).replace('\0', " "),
+                format!("{} ({:?})", info.name, info.backend).replace('\0', " "),
             )
             .unwrap_or_default(),
-            device: owned.device,
-            queue: owned.queue,
+            device,
+            queue,
             renderer,
             errors,
             presenter,
+            vulkan,
         })
+    }
+
+    /// The renderer and the host-device state, for the Vulkan calls.
+    pub(crate) fn renderer_and_host(
+        &mut self,
+    ) -> FfiResult<(&mut Renderer, &mut super::vulkan::VulkanHost)> {
+        match self.vulkan.as_mut() {
+            Some(host) => Ok((&mut self.renderer, host)),
+            None => Err(FfiError::arg(
+                "the context was not created on a host Vulkan device (NimbusVulkanDeviceExt): \
+                 use nimbus_context_render with NimbusTextures",
+            )),
+        }
+    }
+
+    /// Errors the device reported since the last call (validation, out of memory, loss).
+    pub(crate) fn take_device_errors(&self) -> FfiResult {
+        Ok(self.errors.take()?)
     }
 
     fn render(&mut self, frame: &NimbusFrame, targets: &NimbusTargets) -> FfiResult<NimbusResult> {
@@ -508,6 +547,45 @@ impl ContextInner {
         self.errors.take()?;
         Ok(status)
     }
+}
+
+/// The window surface of an owned device, configured for presenting.
+fn presenter(
+    owned: &crate::device::OwnedDevice,
+    surface: wgpu::Surface<'static>,
+    desc: &NimbusContextDesc,
+) -> FfiResult<Presenter> {
+    let caps = surface.get_capabilities(&owned.adapter);
+    let format = caps
+        .formats
+        .iter()
+        .copied()
+        .find(|f| f.is_srgb() && crate::renderer::OUTPUT_FORMATS.contains(f))
+        .or_else(|| {
+            caps.formats
+                .iter()
+                .copied()
+                .find(|f| crate::renderer::OUTPUT_FORMATS.contains(f))
+        })
+        .ok_or_else(|| {
+            FfiError::new(
+                NIMBUS_ERROR_SURFACE,
+                format!("no supported surface format in {:?}", caps.formats),
+            )
+        })?;
+    let mut config = surface
+        .get_default_config(&owned.adapter, desc.width, desc.height)
+        .ok_or_else(|| {
+            FfiError::new(
+                NIMBUS_ERROR_SURFACE,
+                "the adapter cannot present to this window",
+            )
+        })?;
+    config.format = format;
+    config.present_mode = wgpu::PresentMode::Fifo;
+    config.view_formats = vec![];
+    gpu_scope(&owned.device, || surface.configure(&owned.device, &config))?;
+    Ok(Presenter { surface, config })
 }
 
 fn invalid_target(message: String) -> FfiError {

@@ -17,6 +17,8 @@ mod log;
 mod result;
 mod texture;
 mod types;
+#[cfg(not(any(target_vendor = "apple", target_arch = "wasm32")))]
+mod vulkan;
 
 use std::cell::{Cell, RefCell};
 use std::ffi::{c_char, CString};
@@ -29,13 +31,15 @@ pub use result::NimbusResult::{self, *};
 pub use result::*;
 pub use texture::*;
 pub use types::*;
+#[cfg(not(any(target_vendor = "apple", target_arch = "wasm32")))]
+pub use vulkan::*;
 
 use crate::Error;
 
 /// Major version of the library; a context made with a header of another major version fails.
 pub const NIMBUS_VERSION_MAJOR: u32 = 0;
 /// Minor version.
-pub const NIMBUS_VERSION_MINOR: u32 = 2;
+pub const NIMBUS_VERSION_MINOR: u32 = 3;
 /// Patch version.
 pub const NIMBUS_VERSION_PATCH: u32 = 0;
 /// The oldest minor version of this major whose headers this library still serves.
@@ -81,6 +85,7 @@ impl From<Error> for FfiError {
             Error::PresetFile { .. } => NIMBUS_ERROR_PRESET_FILE,
             Error::InvalidWeather(_) => NIMBUS_ERROR_WEATHER,
             Error::Surface(_) => NIMBUS_ERROR_SURFACE,
+            Error::Vulkan(_) => NIMBUS_ERROR_VULKAN_REQUIREMENT,
             Error::Image(_) => NIMBUS_ERROR_INVALID_ARGUMENT,
             Error::DeviceLost(_) => NIMBUS_ERROR_DEVICE_LOST,
         };
@@ -237,7 +242,7 @@ mod tests {
             NIMBUS_VERSION_MINOR,
         );
         let stated =
-            format!("This library is {major}.{ours} and serves {major}.{min} and {major}.{ours}.");
+            format!("This library is {major}.{ours} and serves {major}.{min} to {major}.{ours}.");
         assert!(docs.contains(&stated), "docs/c-api.md must state: {stated}");
         // The code: exactly the minors min..=ours of this major, never 0.
         for minor in 0..ours + 3 {

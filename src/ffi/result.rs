@@ -47,6 +47,9 @@ pub enum NimbusResult {
     NIMBUS_ERROR_WEATHER = -11,
     /// The window surface could not be created or configured.
     NIMBUS_ERROR_SURFACE = -12,
+    /// The host's Vulkan instance or device lacks an API version, extension, feature or queue
+    /// Nimbus needs, or describes it inconsistently (since ABI 0.3; the message names it).
+    NIMBUS_ERROR_VULKAN_REQUIREMENT = -13,
     /// A panic inside Nimbus was caught; the context is now poisoned.
     NIMBUS_ERROR_PANIC = -100,
     /// The context was poisoned by an earlier panic; only nimbus_context_destroy remains.
@@ -72,6 +75,7 @@ pub(crate) const ALL_RESULTS: &[NimbusResult] = &[
     NIMBUS_ERROR_PRESET_FILE,
     NIMBUS_ERROR_WEATHER,
     NIMBUS_ERROR_SURFACE,
+    NIMBUS_ERROR_VULKAN_REQUIREMENT,
     NIMBUS_ERROR_PANIC,
     NIMBUS_ERROR_POISONED,
     NIMBUS_ERROR_DEVICE_LOST,
@@ -102,6 +106,7 @@ impl NimbusResult {
             NIMBUS_ERROR_PRESET_FILE => "NIMBUS_ERROR_PRESET_FILE\0",
             NIMBUS_ERROR_WEATHER => "NIMBUS_ERROR_WEATHER\0",
             NIMBUS_ERROR_SURFACE => "NIMBUS_ERROR_SURFACE\0",
+            NIMBUS_ERROR_VULKAN_REQUIREMENT => "NIMBUS_ERROR_VULKAN_REQUIREMENT\0",
             NIMBUS_ERROR_PANIC => "NIMBUS_ERROR_PANIC\0",
             NIMBUS_ERROR_POISONED => "NIMBUS_ERROR_POISONED\0",
             NIMBUS_ERROR_DEVICE_LOST => "NIMBUS_ERROR_DEVICE_LOST\0",
@@ -131,6 +136,9 @@ impl NimbusResult {
             NIMBUS_ERROR_PRESET_FILE => "a preset file is missing, too large or malformed\0",
             NIMBUS_ERROR_WEATHER => "the weather request is unusable\0",
             NIMBUS_ERROR_SURFACE => "the window surface could not be created or configured\0",
+            NIMBUS_ERROR_VULKAN_REQUIREMENT => {
+                "the host's Vulkan instance or device lacks something Nimbus needs\0"
+            }
             NIMBUS_ERROR_PANIC => "a panic inside Nimbus was caught; the context is poisoned\0",
             NIMBUS_ERROR_POISONED => "the context was poisoned by an earlier panic\0",
             NIMBUS_ERROR_DEVICE_LOST => "the GPU device was lost; create a new context\0",
@@ -200,6 +208,7 @@ mod tests {
             (NIMBUS_ERROR_PRESET_FILE, -10),
             (NIMBUS_ERROR_WEATHER, -11),
             (NIMBUS_ERROR_SURFACE, -12),
+            (NIMBUS_ERROR_VULKAN_REQUIREMENT, -13),
             (NIMBUS_ERROR_PANIC, -100),
             (NIMBUS_ERROR_POISONED, -101),
             (NIMBUS_ERROR_DEVICE_LOST, -200),
