@@ -271,6 +271,37 @@
 #define NIMBUS_FORMAT_R32_FLOAT 5
 
 /*
+ 8-bit color in B, G, R, A order (since ABI 0.3).
+ */
+#define NIMBUS_FORMAT_BGRA8_UNORM 6
+
+/*
+ 8-bit sRGB-encoded color in B, G, R, A order (since ABI 0.3).
+ */
+#define NIMBUS_FORMAT_BGRA8_UNORM_SRGB 7
+
+/*
+ 10-bit color with 2-bit alpha, one little-endian 32-bit word per pixel, R in the low bits
+ (Vulkan's `A2B10G10R10_UNORM_PACK32`; since ABI 0.3).
+ */
+#define NIMBUS_FORMAT_RGB10A2_UNORM 8
+
+/*
+ Packed unsigned float HDR color, one 32-bit word per pixel, R in the low 11 bits
+ (Vulkan's `B10G11R11_UFLOAT_PACK32`; since ABI 0.3). Only where the device can render to
+ it (`nimbus_texture_create` says so otherwise).
+ */
+#define NIMBUS_FORMAT_RG11B10_UFLOAT 9
+
+/*
+ A real 16-bit depth buffer (`D16_UNORM`), in the camera's depth convention, written as
+ 16-bit unsigned integers (since ABI 0.3). The other depth formats cannot be written from
+ the CPU (WebGPU's copy rules): hand a real D32 / D24S8 depth buffer in through the host
+ Vulkan device path, or write clip depth to `NIMBUS_FORMAT_R32_FLOAT`.
+ */
+#define NIMBUS_FORMAT_DEPTH16_UNORM 10
+
+/*
  `s_type` of `NimbusVulkanDeviceExt` (chain it to `NimbusContextDesc.next`). Since ABI 0.3.
  */
 #define NIMBUS_STYPE_VULKAN_DEVICE 3

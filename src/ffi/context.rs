@@ -10,7 +10,7 @@ use std::sync::Arc;
 use glam::{Mat4, Vec3};
 use raw_window_handle as rwh;
 
-use super::texture::format_name;
+use super::texture::{format_name, is_color};
 use super::*;
 use crate::device::{create_owned_device, gpu_scope, DeviceErrors};
 use crate::headless::MAX_HEADLESS_SIZE;
@@ -601,16 +601,17 @@ fn check_c_targets(
     surface_size: Option<(u32, u32)>,
 ) -> FfiResult {
     let size = |t: &NimbusTexture| format!("{}x{}", t.size().0, t.size().1);
-    if scene.format == NIMBUS_FORMAT_R32_FLOAT {
-        return Err(invalid_target(
-            "targets.scene_color is NIMBUS_FORMAT_R32_FLOAT, a depth format: give a color texture"
-                .into(),
-        ));
+    if !is_color(scene.format) {
+        return Err(invalid_target(format!(
+            "targets.scene_color is {}, a depth format: give a color texture",
+            format_name(scene.format)
+        )));
     }
     if let Some(d) = depth {
-        if d.format != NIMBUS_FORMAT_R32_FLOAT {
+        if is_color(d.format) {
             return Err(invalid_target(format!(
-                "targets.scene_depth must be NIMBUS_FORMAT_R32_FLOAT (clip-space depth), got {}",
+                "targets.scene_depth must be NIMBUS_FORMAT_R32_FLOAT (clip-space depth) or \
+                 NIMBUS_FORMAT_DEPTH16_UNORM, got {}",
                 format_name(d.format)
             )));
         }
@@ -624,10 +625,11 @@ fn check_c_targets(
     }
     match output {
         Some(out) => {
-            if out.format == NIMBUS_FORMAT_R32_FLOAT {
-                return Err(invalid_target(
-                    "targets.output is NIMBUS_FORMAT_R32_FLOAT, a depth format: give a color texture".into(),
-                ));
+            if !is_color(out.format) {
+                return Err(invalid_target(format!(
+                    "targets.output is {}, a depth format: give a color texture",
+                    format_name(out.format)
+                )));
             }
             if std::ptr::eq(out, scene) && out.format == NIMBUS_FORMAT_RGBA32_FLOAT {
                 return Err(invalid_target(

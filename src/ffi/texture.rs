@@ -9,8 +9,10 @@ use super::{
     boundary, check_chain, FfiError, FfiResult, NimbusResult, NimbusTextureDesc, NIMBUS_OK,
 };
 use super::{
-    NIMBUS_ERROR_INVALID_TARGET, NIMBUS_FORMAT_R32_FLOAT, NIMBUS_FORMAT_RGBA16_FLOAT,
-    NIMBUS_FORMAT_RGBA32_FLOAT, NIMBUS_FORMAT_RGBA8_UNORM, NIMBUS_FORMAT_RGBA8_UNORM_SRGB,
+    NIMBUS_ERROR_INVALID_TARGET, NIMBUS_FORMAT_BGRA8_UNORM, NIMBUS_FORMAT_BGRA8_UNORM_SRGB,
+    NIMBUS_FORMAT_DEPTH16_UNORM, NIMBUS_FORMAT_R32_FLOAT, NIMBUS_FORMAT_RG11B10_UFLOAT,
+    NIMBUS_FORMAT_RGB10A2_UNORM, NIMBUS_FORMAT_RGBA16_FLOAT, NIMBUS_FORMAT_RGBA32_FLOAT,
+    NIMBUS_FORMAT_RGBA8_UNORM, NIMBUS_FORMAT_RGBA8_UNORM_SRGB,
 };
 use crate::device::{gpu_scope, read_texture, texture_2d};
 use crate::headless::MAX_HEADLESS_SIZE;
@@ -38,9 +40,14 @@ fn format_of(format: u32) -> FfiResult<(wgpu::TextureFormat, u32)> {
         NIMBUS_FORMAT_RGBA16_FLOAT => (F::Rgba16Float, 8),
         NIMBUS_FORMAT_RGBA32_FLOAT => (F::Rgba32Float, 16),
         NIMBUS_FORMAT_R32_FLOAT => (F::R32Float, 4),
+        NIMBUS_FORMAT_BGRA8_UNORM => (F::Bgra8Unorm, 4),
+        NIMBUS_FORMAT_BGRA8_UNORM_SRGB => (F::Bgra8UnormSrgb, 4),
+        NIMBUS_FORMAT_RGB10A2_UNORM => (F::Rgb10a2Unorm, 4),
+        NIMBUS_FORMAT_RG11B10_UFLOAT => (F::Rg11b10Ufloat, 4),
+        NIMBUS_FORMAT_DEPTH16_UNORM => (F::Depth16Unorm, 2),
         _ => {
             return Err(FfiError::arg(format!(
-                "unknown texture format {format} (valid: NIMBUS_FORMAT_* 1..=5)"
+                "unknown texture format {format} (valid: NIMBUS_FORMAT_* 1..=10)"
             )))
         }
     })
@@ -64,6 +71,14 @@ unsafe fn checked<'a>(
     Ok(tex)
 }
 
+/// Whether a `NIMBUS_FORMAT_*` value is a color format (else a depth one).
+pub(crate) fn is_color(format: u32) -> bool {
+    !matches!(
+        format,
+        NIMBUS_FORMAT_R32_FLOAT | NIMBUS_FORMAT_DEPTH16_UNORM
+    )
+}
+
 /// The header's name of a `NIMBUS_FORMAT_*` value.
 pub(crate) fn format_name(format: u32) -> &'static str {
     match format {
@@ -72,6 +87,11 @@ pub(crate) fn format_name(format: u32) -> &'static str {
         NIMBUS_FORMAT_RGBA16_FLOAT => "NIMBUS_FORMAT_RGBA16_FLOAT",
         NIMBUS_FORMAT_RGBA32_FLOAT => "NIMBUS_FORMAT_RGBA32_FLOAT",
         NIMBUS_FORMAT_R32_FLOAT => "NIMBUS_FORMAT_R32_FLOAT",
+        NIMBUS_FORMAT_BGRA8_UNORM => "NIMBUS_FORMAT_BGRA8_UNORM",
+        NIMBUS_FORMAT_BGRA8_UNORM_SRGB => "NIMBUS_FORMAT_BGRA8_UNORM_SRGB",
+        NIMBUS_FORMAT_RGB10A2_UNORM => "NIMBUS_FORMAT_RGB10A2_UNORM",
+        NIMBUS_FORMAT_RG11B10_UFLOAT => "NIMBUS_FORMAT_RG11B10_UFLOAT",
+        NIMBUS_FORMAT_DEPTH16_UNORM => "NIMBUS_FORMAT_DEPTH16_UNORM",
         _ => "an unknown format",
     }
 }
@@ -154,9 +174,21 @@ pub unsafe extern "C" fn nimbus_texture_create(
                     )));
                 }
             }
+            if format == wgpu::TextureFormat::Rg11b10Ufloat
+                && !inner
+                    .device
+                    .features()
+                    .contains(wgpu::Features::RG11B10UFLOAT_RENDERABLE)
+            {
+                return Err(FfiError::new(
+                    NIMBUS_ERROR_INVALID_TARGET,
+                    "NIMBUS_FORMAT_RG11B10_UFLOAT: this device cannot render to it \
+                     (no RG11B10UFLOAT_RENDERABLE); use NIMBUS_FORMAT_RGBA16_FLOAT",
+                ));
+            }
             use wgpu::TextureUsages as U;
             let mut usage = U::TEXTURE_BINDING | U::COPY_DST | U::COPY_SRC;
-            if format != wgpu::TextureFormat::R32Float {
+            if is_color(desc.format) {
                 usage |= U::RENDER_ATTACHMENT;
             }
             let device = inner.device.clone();

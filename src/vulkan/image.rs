@@ -227,6 +227,9 @@ pub struct HostFrame {
     wrappers: Vec<Wrapped>,
     frame: u64,
     wraps_created: u64,
+    /// CPU time of the last frame's hand-off: checks, wrapping, final transitions, barrier
+    /// buffers and semaphores (everything but the renderer's own work and the submit).
+    last_handoff: std::time::Duration,
 }
 
 impl HostFrame {
@@ -259,12 +262,20 @@ impl HostFrame {
             wrappers: Vec::new(),
             frame: 0,
             wraps_created: 0,
+            last_handoff: std::time::Duration::ZERO,
         })
     }
 
     /// How many wgpu textures were made on host images so far (for the no-per-frame tests).
     pub fn wraps_created(&self) -> u64 {
         self.wraps_created
+    }
+
+    /// The CPU time the last [`HostFrame::render`] spent on the hand-off itself: checking and
+    /// wrapping the images, their final transitions, the two barrier command buffers and the
+    /// semaphores; the renderer's encoding and the submit are not in it (for benchmarks).
+    pub fn last_handoff_time(&self) -> std::time::Duration {
+        self.last_handoff
     }
 
     /// Checks one image against its role: format, usage, layouts, size, mip and layer.
@@ -572,6 +583,7 @@ impl HostFrame {
         waits: &[Semaphore],
         signals: &[Semaphore],
     ) -> Result<()> {
+        let started = std::time::Instant::now();
         let color_format = self.check_image(ImageRole::Color, color)?;
         let depth_format = match depth {
             Some(d) => Some(self.check_image(ImageRole::Depth, d)?),
@@ -596,13 +608,16 @@ impl HostFrame {
                 });
             }
         }
+        let mut handoff = started.elapsed();
         renderer.prepare(frame)?;
+        let started = std::time::Instant::now();
         self.frame += 1;
         let c = self.wrap(ImageRole::Color, color, color_format);
         let d = match (depth, depth_format) {
             (Some(image), Some(format)) => Some(self.wrap(ImageRole::Depth, image, format)),
             _ => None,
         };
+        handoff += started.elapsed();
         let mut encoder = self.device.create_command_encoder(&Default::default());
         renderer.encode(
             &mut encoder,
@@ -611,6 +626,7 @@ impl HostFrame {
                 depth: d.map(|i| &self.wrappers[i].view),
             },
         )?;
+        let started = std::time::Instant::now();
         let transition = |i: usize, image: &HostImage| wgpu::TextureTransition {
             texture: &self.wrappers[i].texture,
             selector: Some(wgpu::wgt::TextureSelector {
@@ -644,6 +660,7 @@ impl HostFrame {
                 hal_queue.add_signal_semaphore(s.semaphore, s.value);
             }
         }
+        self.last_handoff = handoff + started.elapsed();
         crate::device::gpu_scope(&self.device, || {
             self.queue.submit([before, work, after]);
         })?;

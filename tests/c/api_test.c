@@ -348,6 +348,62 @@ static void test_textures(void) {
     nimbus_texture_destroy(NULL); /* no-op */
 }
 
+/* Since ABI 0.3: BGRA8 (+ sRGB), RGB10A2 and (where renderable) RG11B10 color, and a real
+ * D16 depth buffer, on the owned-texture path. Each color format is composited in place over a
+ * D16 depth whose near half occludes: those pixels must come back unchanged. */
+static void test_owned_formats(void) {
+    static const uint32_t colors[] = {NIMBUS_FORMAT_BGRA8_UNORM, NIMBUS_FORMAT_BGRA8_UNORM_SRGB,
+                                      NIMBUS_FORMAT_RGB10A2_UNORM, NIMBUS_FORMAT_RG11B10_UFLOAT};
+    static uint16_t depth16[W * H];
+    static uint32_t pixels[W * H], back[W * H];
+    NimbusTexture *d16 = make_texture(W, H, NIMBUS_FORMAT_DEPTH16_UNORM), *c;
+    NimbusTextureDesc desc = {0};
+    NimbusFrame f;
+    NimbusTargets t = {0};
+    size_t size = 0, i, k, changed;
+    int32_t rc;
+
+    EXPECT(nimbus_texture_byte_size(d16, &size), NIMBUS_OK);
+    TRUE(size == sizeof depth16);
+    /* Left half: depth 0.5 of a near = 1 m projection, about 2 m away (occluding everything);
+     * right half: the far plane (sky). */
+    for (i = 0; i < W * H; i++) depth16[i] = (i % W) < W / 2 ? 32768 : 65535;
+    EXPECT(nimbus_texture_write(d16, depth16, sizeof depth16), NIMBUS_OK);
+    frame_defaults(&f);
+    t.scene_depth = d16;
+    for (k = 0; k < sizeof colors / sizeof colors[0]; k++) {
+        desc.width = W; desc.height = H; desc.format = colors[k];
+        c = NULL;
+        rc = nimbus_texture_create(ctx, &desc, &c);
+        if (colors[k] == NIMBUS_FORMAT_RG11B10_UFLOAT && rc == NIMBUS_ERROR_INVALID_TARGET) {
+            TRUE(strstr(nimbus_context_last_error(ctx), "RG11B10") != NULL); /* not renderable here */
+            continue;
+        }
+        EXPECT_ON(ctx, rc, NIMBUS_OK);
+        if (!c) continue;
+        for (i = 0; i < W * H; i++) pixels[i] = 0x40506070u + (uint32_t)(i % 7);
+        EXPECT(nimbus_texture_write(c, pixels, sizeof pixels), NIMBUS_OK);
+        t.scene_color = c; t.output = c; /* in place */
+        EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_OK);
+        EXPECT(nimbus_texture_read(c, back, sizeof back), NIMBUS_OK);
+        for (i = 0, changed = 0; i < W * H; i++)
+            if ((i % W) < W / 2 && back[i] != pixels[i]) changed++;
+        TRUE(changed == 0);
+        for (i = 0, changed = 0; i < W * H; i++)
+            if ((i % W) >= W / 2 && back[i] != pixels[i]) changed++;
+        TRUE(changed > 0); /* the sky half got its clouds */
+        /* A depth format as color, a color format as depth. */
+        t.scene_color = d16; t.output = c;
+        EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET, "NIMBUS_FORMAT_DEPTH16_UNORM");
+        t.scene_color = c; t.scene_depth = c;
+        EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET, "targets.scene_depth");
+        t.scene_depth = d16;
+        nimbus_texture_destroy(c);
+    }
+    EXPECT(nimbus_texture_write(d16, depth16, sizeof depth16 - 2), NIMBUS_ERROR_INVALID_TARGET);
+    nimbus_texture_destroy(d16);
+}
+
 static void test_render(void) {
     NimbusFrame f;
     NimbusTargets t = {0};
@@ -757,6 +813,7 @@ int main(int argc, char **argv) {
     if (!ctx) { printf("no context: %s\n", nimbus_context_last_error(NULL)); return 1; }
     test_textures();
     test_render();
+    test_owned_formats();
     test_weather_and_resize();
     test_second_context();
     test_old_header_and_device_loss();
