@@ -405,8 +405,16 @@ fn run(o: &Options) -> Res<()> {
     for i in 0..o.frames {
         let inputs = frame_at(i);
         let t = Instant::now();
-        unsafe { frame.render(&mut renderer, &inputs, &color, Some(&depth), &[], &[]) }
-            .map_err(err("HostFrame::render"))?;
+        unsafe {
+            frame.render(
+                &mut renderer,
+                &inputs,
+                (&color, Some(&depth), None),
+                &[],
+                &[],
+            )
+        }
+        .map_err(err("HostFrame::render"))?;
         let dt = t.elapsed().as_secs_f64() * 1e6;
         wait(&adopted.device).map_err(err("poll"))?;
         if i >= 2 {
@@ -467,6 +475,7 @@ fn run(o: &Options) -> Res<()> {
                 &Targets {
                     color: ColorTargets::InPlace(&color_view),
                     depth: Some(&depth_view),
+                    viewport: None,
                 },
             )
             .map_err(err("encode"))?;

@@ -105,6 +105,12 @@
 #define NIMBUS_STYPE_QUALITY 2
 
 /*
+ `s_type` of `NimbusViewportExt` (chain it to `NimbusTargets.next` or
+ `NimbusVulkanTargets.next`). Since ABI 0.3.
+ */
+#define NIMBUS_STYPE_VIEWPORT 4
+
+/*
  Window platforms for `NimbusWindowHandle.platform`.
  */
 #define NIMBUS_PLATFORM_X11 1
@@ -814,6 +820,14 @@ typedef void (*NimbusQueueLockFn)(void *user_data);
 /*
  Chained to `NimbusContextDesc.next`: create the context on the host's own Vulkan device
  (`desc.window` must be NULL). Every handle must outlive the context. Since ABI 0.3.
+
+ The calls that touch the queue (vkQueueSubmit or vkQueueWaitIdle, under `lock_queue` /
+ `unlock_queue` when given): `nimbus_context_create` (uploads, the noise bake),
+ `nimbus_context_render_vulkan` and `nimbus_context_render` (one submit),
+ `nimbus_texture_write` and `nimbus_texture_read` on its textures, the weather calls
+ (`nimbus_context_set_weather`, `_load_weather`, `_set_weather_toml`, `_cancel_weather`: they
+ bake a weather map), `nimbus_context_release_vulkan_images` and `nimbus_context_destroy`
+ (they wait). No other call does.
  */
 typedef struct NimbusVulkanDeviceExt {
   /*
@@ -873,6 +887,36 @@ typedef struct NimbusVulkanDeviceExt {
    */
   void *lock_user_data;
 } NimbusVulkanDeviceExt;
+
+/*
+ Chained to a frame's targets: render only this rectangle of them (split screen, dynamic
+ resolution). The frame's projection maps onto the rectangle; pixels outside it are left
+ untouched; the scene depth is read at the same pixels. A context keeps one history: render
+ one rectangle per frame (a change of its size starts the history afresh, moving it keeps
+ it); for several views per frame use one context per view. Since ABI 0.3.
+ */
+typedef struct NimbusViewportExt {
+  /*
+   `s_type` = `NIMBUS_STYPE_VIEWPORT`.
+   */
+  struct NimbusChainedStruct chain;
+  /*
+   Left edge in pixels.
+   */
+  uint32_t x;
+  /*
+   Top edge in pixels.
+   */
+  uint32_t y;
+  /*
+   Width in pixels (at least 1; x + width within the targets).
+   */
+  uint32_t width;
+  /*
+   Height in pixels (at least 1; y + height within the targets).
+   */
+  uint32_t height;
+} NimbusViewportExt;
 
 
 

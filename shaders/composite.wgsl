@@ -8,6 +8,18 @@ struct CompositeUniforms {
     inv_view_proj: mat4x4f,
     camera: vec4f,   // xyz position, w: depth value meaning "far / sky"
     params: vec4f,   // x: trace divisor (1, 2, 4), y: has scene depth (0/1)
+    viewport: vec4f, // the rectangle of the targets rendered: x, y, width, height (px)
+}
+
+// Where the rendered rectangle sits in the scene depth (load_scene_depth adds its origin).
+fn scene_viewport() -> vec4f {
+    return cu.viewport;
+}
+
+// A fragment's pixel inside the rendered rectangle (the render pass's viewport and scissor
+// keep fragments inside it).
+fn local_pixel(pos: vec4f) -> vec2u {
+    return vec2u(pos.xy) - vec2u(cu.viewport.xy);
 }
 
 @group(0) @binding(0) var clouds: texture_2d<f32>;
@@ -27,7 +39,7 @@ fn full_scene_distance(pixel: vec2u) -> f32 {
     if (cu.params.y < 0.5) {
         return NO_SCENE;
     }
-    let dims = textureDimensions(scene_depth);
+    let dims = vec2u(cu.viewport.zw);
     return scene_distance_at(cu.inv_view_proj, cu.camera.xyz, cu.camera.w, pixel_ndc(pixel, dims), load_scene_depth(pixel));
 }
 
@@ -69,5 +81,5 @@ fn fetch_clouds(pixel: vec2u) -> vec4f {
 // In place: the blend state does scene * T + L (src One, dst SrcAlpha; alpha kept).
 @fragment
 fn fs_in_place(@builtin(position) pos: vec4f) -> @location(0) vec4f {
-    return fetch_clouds(vec2u(pos.xy));
+    return fetch_clouds(local_pixel(pos));
 }

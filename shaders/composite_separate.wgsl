@@ -4,7 +4,7 @@
 
 @fragment
 fn fs_separate(@builtin(position) pos: vec4f) -> @location(0) vec4f {
-    let c = fetch_clouds(vec2u(pos.xy));
+    let c = fetch_clouds(local_pixel(pos));
     let s = textureLoad(scene, vec2u(pos.xy), 0);
     return vec4f(s.rgb * c.a + c.rgb, s.a);
 }

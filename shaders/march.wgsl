@@ -30,6 +30,12 @@ struct MarchUniforms {
     grid: vec4f,            // trace grid width, height, block edge k (1, 2, 4), pixel angle (rad)
     pattern: vec4f,         // this frame's offset in the block (x, y), visit index, unused
     opts: vec4f,            // coarse-then-fine, distance-grown steps, noise LOD, light LOD (0/1)
+    viewport: vec4f,        // the rectangle of the scene targets rendered: x, y, width, height (px)
+}
+
+// Where the rendered rectangle sits in the scene depth (load_scene_depth adds its origin).
+fn scene_viewport() -> vec4f {
+    return u.viewport;
 }
 
 // Per-frame parameters: a read-only storage buffer, not a uniform (lavapipe compiles a shader
@@ -263,7 +269,7 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
     var scene_t = NO_SCENE;
     if (u.misc.w > 0.5) {
         let scale = u32(u.tangent_z.w);
-        let full = textureDimensions(scene_depth);
+        let full = vec2u(u.viewport.zw);
         let at = min(gp * scale + vec2u(scale / 2u), full - vec2u(1u));
         scene_t = scene_distance_at(u.inv_view_proj, cam, u.sun_color.w, ndc, load_scene_depth(at));
         max_t = min(max_t, scene_t);

@@ -21,6 +21,12 @@ struct TemporalUniforms {
     grid: vec4f,     // grid width, height, block edge k, trace divisor (output px per grid px)
     pattern: vec4f,  // this frame's offset in the block (x, y), history valid (0/1), max samples
     misc: vec4f,     // has scene depth (0/1), far depth value, max distance (m), unused
+    viewport: vec4f, // the rectangle of the scene targets rendered: x, y, width, height (px)
+}
+
+// Where the rendered rectangle sits in the scene depth (load_scene_depth adds its origin).
+fn scene_viewport() -> vec4f {
+    return tu.viewport;
 }
 
 // Per-frame parameters: a read-only storage buffer, not a uniform (lavapipe compiles a shader
@@ -48,7 +54,7 @@ fn scene_distance_of(p: vec2u, grid: vec2u, ndc: vec2f) -> f32 {
         return NO_SCENE;
     }
     let scale = u32(tu.grid.w);
-    let full = textureDimensions(scene_depth);
+    let full = vec2u(tu.viewport.zw);
     let at = min(p * scale + vec2u(scale / 2u), full - vec2u(1u));
     return scene_distance_at(tu.inv_view_proj, tu.camera.xyz, tu.misc.y, ndc, load_scene_depth(at));
 }

@@ -328,6 +328,7 @@ impl Headless {
             &Targets {
                 color,
                 depth: t.has_depth.then_some(&t.depth_view),
+                viewport: None,
             },
         )?;
         let start = Instant::now();

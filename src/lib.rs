@@ -43,7 +43,7 @@ pub use frame::{Camera, DepthConvention, FrameInputs, Sun};
 pub use gpu::noise::NoiseVolume;
 pub use gpu::timing::PassTimes;
 pub use headless::{Headless, LiveObjects, RayStats};
-pub use renderer::{ColorTargets, Renderer, Targets};
+pub use renderer::{ColorTargets, Renderer, Targets, Viewport};
 pub use settings::{DebugDensity, Quality, Settings, Temporal, TracePattern};
 pub use weather::{Preset, Weather};
 pub use wgpu;

@@ -69,6 +69,23 @@ pub struct Targets<'a> {
     /// Scene depth (`TEXTURE_BINDING`), in the camera's [`crate::DepthConvention`]. `None`
     /// means nothing occludes the clouds.
     pub depth: Option<&'a wgpu::TextureView>,
+    /// The rectangle of the targets to render (split screen, dynamic resolution); `None`: all
+    /// of them. The camera's projection maps onto this rectangle, and pixels outside it are
+    /// left untouched. A change of its size starts the history afresh; moving it keeps it.
+    pub viewport: Option<Viewport>,
+}
+
+/// A rectangle of the targets, in pixels from their top-left corner.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Viewport {
+    /// Left edge.
+    pub x: u32,
+    /// Top edge.
+    pub y: u32,
+    /// Width (at least 1).
+    pub width: u32,
+    /// Height (at least 1).
+    pub height: u32,
 }
 
 /// What the per-size textures depend on: output size, trace divisor, pattern block, temporal.
@@ -202,6 +219,8 @@ fn check_size(target: &'static str, got: (u32, u32), want: (u32, u32)) -> Result
 
 /// Validated targets: output size, formats and which march variant to use.
 struct CheckedTargets {
+    /// The rendered rectangle: x, y, width, height.
+    rect: [u32; 4],
     size: (u32, u32),
     output_format: wgpu::TextureFormat,
     depth_kind: DepthKind,
@@ -256,8 +275,26 @@ fn check_targets(t: &Targets) -> Result<CheckedTargets> {
             }
         }
     };
+    let rect = match t.viewport {
+        None => [0, 0, size.0, size.1],
+        Some(v) => {
+            let inside = v.x.checked_add(v.width).is_some_and(|r| r <= size.0)
+                && v.y.checked_add(v.height).is_some_and(|b| b <= size.1);
+            if v.width == 0 || v.height == 0 || !inside {
+                return Err(invalid_target(
+                    "viewport",
+                    format!(
+                        "({}, {}) {}x{} must be non-empty and inside the {}x{} targets",
+                        v.x, v.y, v.width, v.height, size.0, size.1
+                    ),
+                ));
+            }
+            [v.x, v.y, v.width, v.height]
+        }
+    };
     Ok(CheckedTargets {
-        size,
+        rect,
+        size: (rect[2], rect[3]),
         output_format,
         depth_kind,
     })
@@ -470,6 +507,8 @@ impl Renderer {
         let has_depth = targets.depth.is_some();
         uniforms.set_has_depth(has_depth);
         composite.set_has_depth(has_depth);
+        uniforms.set_viewport(checked.rect);
+        composite.set_viewport(checked.rect);
         let temporal = self.settings.march.temporal;
         let pattern = temporal.pattern;
         let block = pattern.block();
@@ -521,6 +560,7 @@ impl Renderer {
                     max_samples: temporal.max_samples,
                     has_depth,
                     max_distance: self.settings.march.max_distance,
+                    viewport: checked.rect,
                 };
                 self.queue.write_buffer(
                     &self.temporal_uniforms,
@@ -553,6 +593,7 @@ impl Renderer {
                 depth_kind: checked.depth_kind,
                 uniforms: &self.composite_uniforms,
                 timer: self.timer.as_ref(),
+                viewport: checked.rect,
             };
             self.composite.record(
                 &device,

@@ -100,6 +100,7 @@ impl Gpu {
                     output: &out_view,
                 },
                 depth: Some(&depth_view),
+                viewport: None,
             },
         )
         .unwrap();

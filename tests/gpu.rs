@@ -617,6 +617,7 @@ fn renderer_refuses_bad_targets_and_turns_wgpu_errors_into_errors() {
     let in_place = Targets {
         color: ColorTargets::InPlace(&out),
         depth: None,
+        viewport: None,
     };
     assert!(matches!(
         r.encode(&mut enc, &in_place),
@@ -632,6 +633,7 @@ fn renderer_refuses_bad_targets_and_turns_wgpu_errors_into_errors() {
             &Targets {
                 color: ColorTargets::InPlace(&uint),
                 depth: None,
+                viewport: None,
             },
         )
         .unwrap_err();
@@ -651,7 +653,8 @@ fn renderer_refuses_bad_targets_and_turns_wgpu_errors_into_errors() {
             &mut enc,
             &Targets {
                 color: ColorTargets::InPlace(&f32out),
-                depth: None
+                depth: None,
+                viewport: None,
             }
         ),
         Err(Error::UnsupportedFormat { .. })
@@ -663,7 +666,8 @@ fn renderer_refuses_bad_targets_and_turns_wgpu_errors_into_errors() {
             &mut enc,
             &Targets {
                 color: ColorTargets::InPlace(&out),
-                depth: Some(&bad_depth)
+                depth: Some(&bad_depth),
+                viewport: None,
             }
         ),
         Err(Error::UnsupportedFormat {
@@ -680,6 +684,7 @@ fn renderer_refuses_bad_targets_and_turns_wgpu_errors_into_errors() {
             &Targets {
                 color: ColorTargets::InPlace(&out),
                 depth: Some(&small),
+                viewport: None,
             },
         )
         .unwrap_err();
@@ -691,7 +696,8 @@ fn renderer_refuses_bad_targets_and_turns_wgpu_errors_into_errors() {
             &mut enc,
             &Targets {
                 color: ColorTargets::InPlace(&no_render),
-                depth: None
+                depth: None,
+                viewport: None,
             }
         ),
         Err(Error::InvalidTarget {
@@ -707,7 +713,8 @@ fn renderer_refuses_bad_targets_and_turns_wgpu_errors_into_errors() {
                     scene: &out,
                     output: &out
                 },
-                depth: None
+                depth: None,
+                viewport: None,
             }
         ),
         Err(Error::InvalidTarget { .. })
@@ -722,6 +729,7 @@ fn renderer_refuses_bad_targets_and_turns_wgpu_errors_into_errors() {
             &Targets {
                 color: ColorTargets::InPlace(&out),
                 depth: Some(&ds),
+                viewport: None,
             },
         )
         .unwrap_err();
@@ -746,6 +754,7 @@ fn renderer_refuses_bad_targets_and_turns_wgpu_errors_into_errors() {
         &Targets {
             color: ColorTargets::InPlace(&rgba8),
             depth: None,
+            viewport: None,
         },
     )
     .unwrap();

@@ -460,7 +460,7 @@ impl ContextInner {
 
     fn render(&mut self, frame: &NimbusFrame, targets: &NimbusTargets) -> FfiResult<NimbusResult> {
         let inputs = decode_frame(frame)?;
-        check_chain(targets.next, &[])?;
+        let viewport = super::types::viewport_of(targets.next)?;
         // SAFETY: texture pointers are NULL or live textures per the caller's contract.
         let scene = unsafe { targets.scene_color.as_ref() }
             .ok_or_else(|| FfiError::null("targets.scene_color"))?;
@@ -501,6 +501,7 @@ impl ContextInner {
                     &Targets {
                         color,
                         depth: depth_view,
+                        viewport,
                     },
                 )?;
                 self.queue.submit([encoder.finish()]);
@@ -537,6 +538,7 @@ impl ContextInner {
                             output: &view,
                         },
                         depth: depth_view,
+                        viewport,
                     },
                 )?;
                 self.queue.submit([encoder.finish()]);

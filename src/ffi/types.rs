@@ -18,6 +18,56 @@ pub const NIMBUS_STYPE_SETTINGS: u32 = 1;
 /// `s_type` of `NimbusQualityExt` (chain it to `NimbusContextDesc.next`). Since ABI 0.2.
 pub const NIMBUS_STYPE_QUALITY: u32 = 2;
 
+/// `s_type` of `NimbusViewportExt` (chain it to `NimbusTargets.next` or
+/// `NimbusVulkanTargets.next`). Since ABI 0.3.
+pub const NIMBUS_STYPE_VIEWPORT: u32 = 4;
+
+/// Chained to a frame's targets: render only this rectangle of them (split screen, dynamic
+/// resolution). The frame's projection maps onto the rectangle; pixels outside it are left
+/// untouched; the scene depth is read at the same pixels. A context keeps one history: render
+/// one rectangle per frame (a change of its size starts the history afresh, moving it keeps
+/// it); for several views per frame use one context per view. Since ABI 0.3.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct NimbusViewportExt {
+    /// `s_type` = `NIMBUS_STYPE_VIEWPORT`.
+    pub chain: NimbusChainedStruct,
+    /// Left edge in pixels.
+    pub x: u32,
+    /// Top edge in pixels.
+    pub y: u32,
+    /// Width in pixels (at least 1; x + width within the targets).
+    pub width: u32,
+    /// Height in pixels (at least 1; y + height within the targets).
+    pub height: u32,
+}
+
+/// The viewport a targets chain asks for, checking the chain.
+pub(crate) fn viewport_of(
+    next: *const NimbusChainedStruct,
+) -> super::FfiResult<Option<crate::Viewport>> {
+    super::context::check_chain(next, &[NIMBUS_STYPE_VIEWPORT])?;
+    if next.is_null() {
+        return Ok(None);
+    }
+    // SAFETY: the chain was checked; its first link has s_type NIMBUS_STYPE_VIEWPORT.
+    let link = unsafe { &*next };
+    if !link.next.is_null() {
+        return Err(super::FfiError::new(
+            super::NIMBUS_ERROR_UNKNOWN_STRUCT,
+            "NimbusViewportExt appears more than once, or with another struct, in the targets' chain",
+        ));
+    }
+    // SAFETY: an s_type of NIMBUS_STYPE_VIEWPORT promises a NimbusViewportExt.
+    let v = unsafe { &*(next as *const NimbusViewportExt) };
+    Ok(Some(crate::Viewport {
+        x: v.x,
+        y: v.y,
+        width: v.width,
+        height: v.height,
+    }))
+}
+
 /// Window platforms for `NimbusWindowHandle.platform`.
 pub const NIMBUS_PLATFORM_X11: u32 = 1;
 /// Wayland: `display` is the `wl_display*`, `surface` the `wl_surface*`.

@@ -13,7 +13,7 @@ use ash::vk::Handle;
 use super::context::{with_ctx, ContextInner};
 use super::result::NimbusResult::{self, *};
 use super::types::{NimbusChainedStruct, NimbusFrame};
-use super::{boundary, check_chain, FfiError, FfiResult};
+use super::{boundary, FfiError, FfiResult};
 use crate::vulkan::{
     AdoptedDevice, DeviceRequirements, HostDevice, HostFrame, HostImage, HostInstance, QueueLock,
     Semaphore,
@@ -49,6 +49,14 @@ pub struct NimbusVulkanInstance {
 
 /// Chained to `NimbusContextDesc.next`: create the context on the host's own Vulkan device
 /// (`desc.window` must be NULL). Every handle must outlive the context. Since ABI 0.3.
+///
+/// The calls that touch the queue (vkQueueSubmit or vkQueueWaitIdle, under `lock_queue` /
+/// `unlock_queue` when given): `nimbus_context_create` (uploads, the noise bake),
+/// `nimbus_context_render_vulkan` and `nimbus_context_render` (one submit),
+/// `nimbus_texture_write` and `nimbus_texture_read` on its textures, the weather calls
+/// (`nimbus_context_set_weather`, `_load_weather`, `_set_weather_toml`, `_cancel_weather`: they
+/// bake a weather map), `nimbus_context_release_vulkan_images` and `nimbus_context_destroy`
+/// (they wait). No other call does.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct NimbusVulkanDeviceExt {
@@ -571,7 +579,7 @@ impl ContextInner {
         targets: &NimbusVulkanTargets,
     ) -> FfiResult<NimbusResult> {
         let inputs = super::context::decode_frame(frame)?;
-        check_chain(targets.next, &[])?;
+        let viewport = super::types::viewport_of(targets.next)?;
         if targets.color.image == 0 {
             return Err(FfiError::null("targets.color.image"));
         }
@@ -584,8 +592,9 @@ impl ContextInner {
         let (renderer, host) = self.renderer_and_host()?;
         // SAFETY: the images and semaphores are live and as described (the header's contract).
         unsafe {
+            let images = (&color, depth.as_ref(), viewport);
             host.frame
-                .render(renderer, &inputs, &color, depth.as_ref(), &waits, &signals)
+                .render(renderer, &inputs, images, &waits, &signals)
         }?;
         self.take_device_errors()?;
         Ok(NIMBUS_OK)

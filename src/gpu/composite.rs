@@ -18,6 +18,7 @@ pub(crate) struct CompositeUniforms {
     inv_view_proj: [f32; 16],
     camera: [f32; 4],
     params: [f32; 4],
+    viewport: [f32; 4],
 }
 
 impl CompositeUniforms {
@@ -32,7 +33,13 @@ impl CompositeUniforms {
             inv_view_proj: inv_view_proj.to_cols_array(),
             camera: camera.extend(far_value).to_array(),
             params: [divisor as f32, if has_depth { 1.0 } else { 0.0 }, 0.0, 0.0],
+            viewport: [0.0; 4],
         }
+    }
+
+    /// The rectangle of the targets this frame renders (x, y, width, height in pixels).
+    pub(crate) fn set_viewport(&mut self, rect: [u32; 4]) {
+        self.viewport = rect.map(|v| v as f32);
     }
 }
 
@@ -51,6 +58,8 @@ pub(crate) struct CompositeInputs<'a> {
     pub depth_kind: DepthKind,
     pub uniforms: &'a wgpu::Buffer,
     pub timer: Option<&'a super::timing::GpuTimer>,
+    /// The rectangle of the output rendered (x, y, width, height).
+    pub viewport: [u32; 4],
 }
 
 /// A composite pipeline and the bind groups made for it.
@@ -189,6 +198,9 @@ impl CompositeCache {
         });
         pass.set_pipeline(pipeline);
         pass.set_bind_group(0, &bind, &[]);
+        let [x, y, w, h] = inputs.viewport;
+        pass.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
+        pass.set_scissor_rect(x, y, w, h);
         pass.draw(0..3, 0..1);
     }
 

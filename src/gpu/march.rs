@@ -44,6 +44,7 @@ pub(crate) struct MarchUniforms {
     grid: [f32; 4],
     pattern: [f32; 4],
     opts: [f32; 4],
+    viewport: [f32; 4],
 }
 
 /// Two horizontal axes perpendicular to `up` (X and Z for +Y up).
@@ -191,6 +192,8 @@ impl MarchUniforms {
                 flag(s.march.noise_lod),
                 flag(s.lighting.light_lod),
             ],
+            // Set per frame from the targets (set_viewport).
+            viewport: [0.0; 4],
         }
     }
 }
@@ -207,6 +210,11 @@ impl MarchUniforms {
     /// Whether the march clips rays at the scene depth (known only once targets are given).
     pub(crate) fn set_has_depth(&mut self, has_depth: bool) {
         self.misc[3] = flag(has_depth);
+    }
+
+    /// The rectangle of the scene targets this frame renders (x, y, width, height in pixels).
+    pub(crate) fn set_viewport(&mut self, rect: [u32; 4]) {
+        self.viewport = rect.map(|v| v as f32);
     }
 
     /// The trace grid (`grid` pixels), the block edge `block` of the trace pattern, and which
@@ -350,12 +358,12 @@ mod tests {
 
     #[test]
     fn uniforms_match_the_wgsl_struct_size() {
-        // 1 mat4 + 27 vec4 in shaders/march.wgsl.
-        assert_eq!(std::mem::size_of::<MarchUniforms>(), 64 + 27 * 16);
+        // 1 mat4 + 28 vec4 in shaders/march.wgsl.
+        assert_eq!(std::mem::size_of::<MarchUniforms>(), 64 + 28 * 16);
         let src = pass_source("march", DepthKind::Depth);
         let start = src.find("struct MarchUniforms").unwrap();
         let body = &src[start..start + src[start..].find('}').unwrap()];
-        assert_eq!(body.matches(": vec4f").count(), 27);
+        assert_eq!(body.matches(": vec4f").count(), 28);
         assert_eq!(body.matches(": mat4x4f").count(), 1);
     }
 

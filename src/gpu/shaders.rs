@@ -53,11 +53,11 @@ fn depth_binding(kind: DepthKind, binding: &str) -> String {
     match kind {
         DepthKind::Depth => format!(
             "@group(0) @binding({binding}) var scene_depth: texture_depth_2d;\n\
-             fn load_scene_depth(c: vec2u) -> f32 {{ return textureLoad(scene_depth, c, 0); }}"
+             fn load_scene_depth(c: vec2u) -> f32 {{ return textureLoad(scene_depth, c + vec2u(scene_viewport().xy), 0); }}"
         ),
         DepthKind::R32Float => format!(
             "@group(0) @binding({binding}) var scene_depth: texture_2d<f32>;\n\
-             fn load_scene_depth(c: vec2u) -> f32 {{ return textureLoad(scene_depth, c, 0).r; }}"
+             fn load_scene_depth(c: vec2u) -> f32 {{ return textureLoad(scene_depth, c + vec2u(scene_viewport().xy), 0).r; }}"
         ),
     }
 }

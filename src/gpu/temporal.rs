@@ -18,6 +18,7 @@ pub(crate) struct TemporalUniforms {
     grid: [f32; 4],
     pattern: [f32; 4],
     misc: [f32; 4],
+    viewport: [f32; 4],
 }
 
 /// What the resolve of one frame needs to know.
@@ -36,6 +37,8 @@ pub(crate) struct ResolveFrame {
     pub max_samples: u32,
     pub has_depth: bool,
     pub max_distance: f32,
+    /// The rectangle of the scene depth rendered (x, y, width, height).
+    pub viewport: [u32; 4],
 }
 
 impl TemporalUniforms {
@@ -58,6 +61,7 @@ impl TemporalUniforms {
                 f.max_samples as f32,
             ],
             misc: [flag(f.has_depth), f.far_value, f.max_distance, 0.0],
+            viewport: f.viewport.map(|v| v as f32),
         }
     }
 }
@@ -218,11 +222,11 @@ mod tests {
 
     #[test]
     fn uniforms_match_the_wgsl_struct_size() {
-        assert_eq!(std::mem::size_of::<TemporalUniforms>(), 2 * 64 + 4 * 16);
+        assert_eq!(std::mem::size_of::<TemporalUniforms>(), 2 * 64 + 5 * 16);
         let src = pass_source("temporal", DepthKind::Depth);
         let start = src.find("struct TemporalUniforms").unwrap();
         let body = &src[start..start + src[start..].find('}').unwrap()];
-        assert_eq!(body.matches(": vec4f").count(), 4);
+        assert_eq!(body.matches(": vec4f").count(), 5);
         assert_eq!(body.matches(": mat4x4f").count(), 2);
     }
 }

@@ -566,7 +566,8 @@ impl HostFrame {
         encoder.finish()
     }
 
-    /// Validates the images, composites the clouds into `color` in place (reading `depth`),
+    /// Validates the images, composites the clouds into `color` in place (reading `depth`; in
+    /// `viewport` only, when given),
     /// leaves both in their final layouts and submits on the host's queue, waiting on and
     /// signalling the given semaphores. Nothing is submitted when a check fails.
     ///
@@ -578,8 +579,7 @@ impl HostFrame {
         &mut self,
         renderer: &mut Renderer,
         frame: &FrameInputs,
-        color: &HostImage,
-        depth: Option<&HostImage>,
+        (color, depth, viewport): (&HostImage, Option<&HostImage>, Option<crate::Viewport>),
         waits: &[Semaphore],
         signals: &[Semaphore],
     ) -> Result<()> {
@@ -624,6 +624,7 @@ impl HostFrame {
             &Targets {
                 color: ColorTargets::InPlace(&self.wrappers[c].view),
                 depth: d.map(|i| &self.wrappers[i].view),
+                viewport,
             },
         )?;
         let started = std::time::Instant::now();

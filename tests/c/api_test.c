@@ -401,6 +401,36 @@ static void test_owned_formats(void) {
         nimbus_texture_destroy(c);
     }
     EXPECT(nimbus_texture_write(d16, depth16, sizeof depth16 - 2), NIMBUS_ERROR_INVALID_TARGET);
+
+    /* Since ABI 0.3: a viewport (the right half) chained to the targets; the left half stays. */
+    {
+        NimbusViewportExt vp;
+        memset(&vp, 0, sizeof vp);
+        vp.chain.s_type = NIMBUS_STYPE_VIEWPORT;
+        vp.x = W / 2; vp.y = 0; vp.width = W / 2; vp.height = H;
+        desc.width = W; desc.height = H; desc.format = NIMBUS_FORMAT_BGRA8_UNORM;
+        c = NULL;
+        EXPECT_ON(ctx, nimbus_texture_create(ctx, &desc, &c), NIMBUS_OK);
+        if (c) {
+            for (i = 0; i < W * H; i++) pixels[i] = 0x40506070u;
+            EXPECT(nimbus_texture_write(c, pixels, sizeof pixels), NIMBUS_OK);
+            t.scene_color = c; t.output = c; t.scene_depth = NULL; t.next = &vp.chain;
+            EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_OK);
+            EXPECT(nimbus_texture_read(c, back, sizeof back), NIMBUS_OK);
+            for (i = 0, changed = 0; i < W * H; i++)
+                if ((i % W) < W / 2 && back[i] != pixels[i]) changed++;
+            TRUE(changed == 0);
+            for (i = 0, changed = 0; i < W * H; i++)
+                if ((i % W) >= W / 2 && back[i] != pixels[i]) changed++;
+            TRUE(changed > 0);
+            vp.x = W / 2 + 1;
+            EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET, "viewport");
+            vp.x = 0; vp.height = 0;
+            EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET, "viewport");
+            t.next = NULL;
+            nimbus_texture_destroy(c);
+        }
+    }
     nimbus_texture_destroy(d16);
 }
 

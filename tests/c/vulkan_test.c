@@ -555,6 +555,24 @@ static void test_render_inputs(void) {
     BAD(t, NIMBUS_ERROR_INVALID_ARGUMENT, "16", "wait_count 17");
 
     /* Chains and frames. */
+    {
+        /* Since ABI 0.3: a viewport chained to the targets. */
+        NimbusViewportExt vp;
+        memset(&vp, 0, sizeof vp);
+        vp.chain.s_type = NIMBUS_STYPE_VIEWPORT;
+        vp.x = W / 2; vp.y = 0; vp.width = W / 2; vp.height = H;
+        good_targets(&t);
+        t.next = &vp.chain;
+        check(render(ctx, &t), NIMBUS_OK, ctx, NULL, "a viewport: the right half", __LINE__);
+        good_targets(&t);
+        t.next = &vp.chain;
+        vp.x = W / 2 + 1;
+        BAD(t, NIMBUS_ERROR_INVALID_TARGET, "viewport", "a viewport past the right edge");
+        vp.x = 0; vp.width = 0;
+        BAD(t, NIMBUS_ERROR_INVALID_TARGET, "viewport", "a viewport of width 0");
+        vp.width = W; vp.chain.next = &unknown;
+        BAD(t, NIMBUS_ERROR_UNKNOWN_STRUCT, NULL, "a viewport with an unknown struct after it");
+    }
     good_targets(&t); t.next = &unknown;
     BAD(t, NIMBUS_ERROR_UNKNOWN_STRUCT, NULL, "targets->next with s_type 999");
     good_targets(&t);
