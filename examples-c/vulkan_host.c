@@ -38,9 +38,6 @@
 #include <unistd.h>
 
 #include "nimbus.h"
-#ifdef NIMBUS_SPEC_STUB
-#include "nimbus_stub.h"
-#endif
 #include "camera.h"
 #include "png_write.h"
 #include "scene.h"
@@ -155,15 +152,6 @@ static double now_seconds(void) {
     struct timespec t;
     clock_gettime(CLOCK_MONOTONIC, &t);
     return (double)t.tv_sec + (double)t.tv_nsec * 1e-9;
-}
-
-static double rss_mib(void) {
-    long pages = 0, resident = 0;
-    FILE *f = fopen("/proc/self/statm", "r");
-    if (!f) return -1.0;
-    if (fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
-    fclose(f);
-    return (double)resident * (double)sysconf(_SC_PAGESIZE) / (1024.0 * 1024.0);
 }
 
 static int fail(App *a, const char *what, int32_t rc) {
@@ -970,7 +958,7 @@ int main(int argc, char **argv) {
         wait_frame(a);
         nimbus_context_destroy(a->ctx);
         a->ctx = NULL;
-        printf("recreate %d/%d: RSS %.1f MiB\n", i, a->recreate, rss_mib());
+        printf("recreate %d/%d: RSS %.1f MiB\n", i, a->recreate, vks_rss_mib());
     }
     if (a->lock) {
         printf("queue lock calls: %ld\n", a->lock_calls);

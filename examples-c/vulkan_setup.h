@@ -18,12 +18,10 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 #include <vulkan/vulkan.h>
 
 #include "nimbus.h"
-#ifdef NIMBUS_SPEC_STUB
-#include "nimbus_stub.h" /* the Vulkan hand-off declarations until nimbus.h has them */
-#endif
 
 #define VKS_MAX_NAMES 64
 #define VKS_VALIDATION_LAYER "VK_LAYER_KHRONOS_validation"
@@ -39,6 +37,16 @@
  * not requested) ------------------------------------------------------------------------- */
 static pthread_mutex_t vks_message_mutex = PTHREAD_MUTEX_INITIALIZER;
 static int vks_message_count = 0;
+
+/* Resident memory of this process in MiB (Linux: /proc/self/statm), -1 when unknown. */
+static inline double vks_rss_mib(void) {
+    long pages = 0, resident = 0;
+    FILE *f = fopen("/proc/self/statm", "r");
+    if (!f) return -1.0;
+    if (fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
+    fclose(f);
+    return (double)resident * (double)sysconf(_SC_PAGESIZE) / (1024.0 * 1024.0);
+}
 
 static inline int vks_validation_messages(void) {
     int n;

@@ -54,10 +54,16 @@ fn build_once() -> PathBuf {
 }
 
 /// Runs a program; returns its stdout, failing with both streams on a non-zero exit.
+///
+/// glibc's malloc opens another arena whenever threads contend for one (llvmpipe's JIT and
+/// worker threads do, more so while other tests load the machine), and keeps it: RSS then
+/// grows by tens of MiB over context cycles with no leak (docs/soak.md measured the same for
+/// owned contexts). Two arenas keep the RSS check about Nimbus's memory.
 fn run(program: &Path, args: &[&str]) -> String {
     let output = Command::new(program)
         .args(args)
         .env("RUST_BACKTRACE", "0")
+        .env("MALLOC_ARENA_MAX", "2")
         .output()
         .unwrap_or_else(|e| panic!("run {}: {e}", program.display()));
     let stdout = String::from_utf8_lossy(&output.stdout).into_owned();

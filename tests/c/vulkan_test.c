@@ -18,9 +18,6 @@
 #include <unistd.h>
 
 #include "nimbus.h"
-#ifdef NIMBUS_SPEC_STUB
-#include "nimbus_stub.h"
-#endif
 #include "camera.h"
 #include "scene.h"
 #include "vulkan_setup.h"
@@ -121,15 +118,6 @@ static void check(int32_t got, int32_t want, NimbusContext *on, const char *need
             failures++;                                                                             \
         }                                                                                           \
     } while (0)
-
-static double rss_mib(void) {
-    long pages = 0, resident = 0;
-    FILE *f = fopen("/proc/self/statm", "r");
-    if (!f) return -1.0;
-    if (fscanf(f, "%ld %ld", &pages, &resident) != 2) resident = 0;
-    fclose(f);
-    return (double)resident * (double)sysconf(_SC_PAGESIZE) / (1024.0 * 1024.0);
-}
 
 /* ---- the good device, its context and images ----------------------------------------------- */
 static VkSetup G;
@@ -740,8 +728,8 @@ static void lifetimes(VkSetup *dev, NimbusVulkanDeviceExt *ext, VksImage *c_img,
             failures++;
         }
         nimbus_context_destroy(c); /* releases the images, waits for its work */
-        if (i == 5) rss5 = rss_mib();
-        if (i == 20) rss20 = rss_mib();
+        if (i == 5) rss5 = vks_rss_mib();
+        if (i == 20) rss20 = vks_rss_mib();
         if (i == 5 || i == 20) printf("     %s: context cycle %d: RSS %.1f MiB\n", label, i, i == 5 ? rss5 : rss20);
     }
     (void)dev;
