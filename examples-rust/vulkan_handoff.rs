@@ -408,6 +408,7 @@ fn run(o: &Options) -> Res<()> {
         unsafe {
             frame.render(
                 &mut renderer,
+                nimbus::ViewId::DEFAULT,
                 &inputs,
                 (&color, Some(&depth), None),
                 &[],

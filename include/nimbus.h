@@ -74,7 +74,7 @@
 /*
  Minor version.
  */
-#define NIMBUS_VERSION_MINOR 3
+#define NIMBUS_VERSION_MINOR 4
 
 /*
  Patch version.
@@ -306,6 +306,16 @@
  Vulkan device path, or write clip depth to `NIMBUS_FORMAT_R32_FLOAT`.
  */
 #define NIMBUS_FORMAT_DEPTH16_UNORM 10
+
+/*
+ `s_type` of `NimbusViewExt` (chain it to `NimbusFrame.next`). Since ABI 0.4.
+ */
+#define NIMBUS_STYPE_VIEW 5
+
+/*
+ The view a context has from its creation: frames with no `NimbusViewExt` render it.
+ */
+#define NIMBUS_VIEW_DEFAULT 0
 
 /*
  `s_type` of `NimbusVulkanDeviceExt` (chain it to `NimbusContextDesc.next`). Since ABI 0.3.
@@ -891,9 +901,10 @@ typedef struct NimbusVulkanDeviceExt {
 /*
  Chained to a frame's targets: render only this rectangle of them (split screen, dynamic
  resolution). The frame's projection maps onto the rectangle; pixels outside it are left
- untouched; the scene depth is read at the same pixels. A context keeps one history: render
- one rectangle per frame (a change of its size starts the history afresh, moving it keeps
- it); for several views per frame use one context per view. Since ABI 0.3.
+ untouched; the scene depth is read at the same pixels. The history belongs to the frame's
+ view (`NimbusViewExt`): render each rectangle (each split-screen player) with a view of its
+ own; a change of a view's rectangle size starts its history afresh, moving it keeps it.
+ Since ABI 0.3.
  */
 typedef struct NimbusViewportExt {
   /*
@@ -917,6 +928,28 @@ typedef struct NimbusViewportExt {
    */
   uint32_t height;
 } NimbusViewportExt;
+
+/*
+ Chained to a frame: the frame is this view's camera, and renders with this view's
+ history and trace textures. Without it a frame renders `NIMBUS_VIEW_DEFAULT`. Since ABI
+ 0.4.
+ */
+typedef struct NimbusViewExt {
+  /*
+   `s_type` = `NIMBUS_STYPE_VIEW`.
+   */
+  struct NimbusChainedStruct chain;
+  /*
+   A view from `nimbus_context_create_view`, or `NIMBUS_VIEW_DEFAULT`.
+   */
+  uint32_t view;
+  /*
+   Must be 0.
+   */
+  uint32_t reserved;
+} NimbusViewExt;
+
+
 
 
 
@@ -1060,8 +1093,9 @@ NimbusResult nimbus_context_weather_state(struct NimbusContext *ctx,
 NimbusResult nimbus_context_cancel_weather(struct NimbusContext *ctx, double now);
 
 /*
- Drops the accumulated cloud history, so the next frame starts afresh. Call it on camera
- cuts (a teleport, a switch to another camera); ordinary and fast motion need no call.
+ Drops the accumulated cloud history of every view, so the next frames start afresh. Call
+ it on camera cuts (a teleport, a switch to another camera); ordinary and fast motion need
+ no call. For one view: `nimbus_context_reset_view_history`.
 
  Safety: `ctx` must be NULL or a live context.
  */
@@ -1132,6 +1166,48 @@ NimbusResult nimbus_texture_byte_size(const struct NimbusTexture *tex, size_t *o
  Safety: `tex` must be NULL or a texture from `nimbus_texture_create`, not yet destroyed.
  */
 void nimbus_texture_destroy(struct NimbusTexture *tex);
+
+/*
+ Makes a view: its own camera history and trace textures (made at its first frame, sized
+ to its viewport), sharing the context's noise, weather maps and pipelines. Render it by
+ chaining a `NimbusViewExt` to the frame. Use one view per camera that renders every
+ frame (each split-screen player, each eye, each probe face); a context holds at most 64
+ (`NIMBUS_ERROR_INVALID_ARGUMENT` beyond). Creates no GPU work. Since ABI 0.4.
+
+ Safety: `ctx` NULL or live; `out_view` NULL or writable.
+ */
+NimbusResult nimbus_context_create_view(struct NimbusContext *ctx, uint32_t *out_view);
+
+/*
+ Destroys a view made by `nimbus_context_create_view`; its textures are freed once the
+ GPU work that uses them has finished. Its id is refused from then on
+ (`NIMBUS_ERROR_INVALID_ARGUMENT`), and so is `NIMBUS_VIEW_DEFAULT`. Since ABI 0.4.
+
+ Safety: `ctx` NULL or live.
+ */
+NimbusResult nimbus_context_destroy_view(struct NimbusContext *ctx, uint32_t view);
+
+/*
+ Drops one view's accumulated history (a camera cut in that view);
+ `nimbus_context_reset_history` drops every view's. Since ABI 0.4.
+
+ Safety: `ctx` NULL or live.
+ */
+NimbusResult nimbus_context_reset_view_history(struct NimbusContext *ctx, uint32_t view);
+
+/*
+ GPU memory in bytes: what one view holds (its trace textures and uniforms) into
+ `out_view_bytes`, and what all views share (noise volumes, weather maps, blue noise) into
+ `out_shared_bytes` (may be NULL). A context's total is the shared part plus every view's.
+ Since ABI 0.4.
+
+ Safety: `ctx` NULL or live; `out_view_bytes` NULL or writable; `out_shared_bytes` NULL or
+ writable.
+ */
+NimbusResult nimbus_context_view_memory(struct NimbusContext *ctx,
+                                        uint32_t view,
+                                        uint64_t *out_view_bytes,
+                                        uint64_t *out_shared_bytes);
 
 /*
  The instance extensions Nimbus needs: enable them (with yours) at `vkCreateInstance`,

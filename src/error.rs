@@ -54,6 +54,9 @@ pub enum Error {
     /// A weather request is unusable (bad duration, out of time order).
     #[error("invalid weather request: {0}")]
     InvalidWeather(String),
+    /// A view id that names no live view, or too many views.
+    #[error("view: {0}")]
+    InvalidView(String),
     /// `encode` was called before any successful `prepare`.
     #[error("renderer not prepared: call prepare() with the frame inputs before encode()")]
     NotPrepared,

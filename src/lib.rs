@@ -33,6 +33,7 @@ pub mod lighting;
 pub mod renderer;
 pub mod settings;
 mod validate;
+pub mod view;
 /// Nimbus on the host's own Vulkan device and images (Vulkan targets only).
 #[cfg(not(any(target_vendor = "apple", target_arch = "wasm32")))]
 pub mod vulkan;
@@ -45,6 +46,7 @@ pub use gpu::timing::PassTimes;
 pub use headless::{Headless, LiveObjects, RayStats};
 pub use renderer::{ColorTargets, Renderer, Targets, Viewport};
 pub use settings::{DebugDensity, Quality, Settings, Temporal, TracePattern};
+pub use view::ViewId;
 pub use weather::{Preset, Weather};
 pub use wgpu;
 

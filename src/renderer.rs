@@ -13,10 +13,11 @@ use crate::gpu::composite::{CompositeCache, CompositeInputs, CompositeUniforms};
 use crate::gpu::march::{MarchPipeline, MarchUniforms};
 use crate::gpu::noise::{NoiseTextures, NoiseVolume};
 use crate::gpu::shaders::DepthKind;
-use crate::gpu::temporal::{CloudImage, ResolveFrame, TemporalPipeline, TemporalUniforms};
+use crate::gpu::temporal::{ResolveFrame, TemporalPipeline, TemporalUniforms};
 use crate::gpu::timing::{GpuTimer, PassTimes};
 use crate::gpu::weather::WeatherMaps;
 use crate::settings::Settings;
+use crate::view::{Pending, ViewId, ViewState, Views};
 use crate::weather::{Timeline, Weather, WeatherSample};
 
 /// Output formats the composite can render to (blendable ones also work in place).
@@ -88,51 +89,7 @@ pub struct Viewport {
     pub height: u32,
 }
 
-/// What the per-size textures depend on: output size, trace divisor, pattern block, temporal.
-type SizeKey = ((u32, u32), u32, u32, bool);
-
-struct SizedTextures {
-    key: SizeKey,
-    /// The trace grid: the output divided by the trace divisor.
-    grid: (u32, u32),
-    /// This frame's march: one texel per traced pixel (the grid divided by the block edge).
-    fresh: CloudImage,
-    /// The resolved grid, ping-pong (this frame's and last frame's); empty with temporal off.
-    history: Vec<CloudImage>,
-}
-
-/// Where the last frame traced: the grid, the pattern block and this frame's offset in it.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub(crate) struct TraceLayout {
-    pub grid: (u32, u32),
-    pub block: u32,
-    pub offset: (u32, u32),
-}
-
-/// What `prepare` derived for `encode`.
-#[derive(Clone, Copy)]
-struct Pending {
-    march: MarchUniforms,
-    composite: CompositeUniforms,
-    view_proj: glam::Mat4,
-    inv_view_proj: glam::Mat4,
-    camera: glam::Vec3,
-    near_value: f32,
-    far_value: f32,
-}
-
-/// Temporal reprojection state between frames.
-#[derive(Default)]
-struct History {
-    /// Index into `SizedTextures::history` of the last resolved grid.
-    current: usize,
-    /// The view-projection the last resolved grid was rendered with; `None`: no usable history.
-    view_proj: Option<glam::Mat4>,
-    /// Where the last frame traced (for the readback helpers).
-    layout: Option<TraceLayout>,
-    /// Whether the last frame ran the resolve pass.
-    resolved: bool,
-}
+pub(crate) use crate::view::TraceLayout;
 
 /// Renders volumetric clouds with the host's wgpu device.
 pub struct Renderer {
@@ -143,20 +100,14 @@ pub struct Renderer {
     weather_maps: WeatherMaps,
     timeline: Timeline,
     last_time: f64,
-    march_depth: MarchPipeline,
-    march_r32: MarchPipeline,
-    temporal_depth: TemporalPipeline,
-    temporal_r32: TemporalPipeline,
+    passes: ComputePasses,
     composite: CompositeCache,
-    uniforms: wgpu::Buffer,
-    temporal_uniforms: wgpu::Buffer,
-    composite_uniforms: wgpu::Buffer,
     no_depth: wgpu::TextureView,
-    sized: Option<SizedTextures>,
-    pending: Option<Pending>,
-    history: History,
+    /// Per-camera state; the default view always exists.
+    views: Views,
+    /// The view `encode_view` recorded last (for the pass times and readback helpers).
+    last_view: ViewId,
     timer: Option<GpuTimer>,
-    frame_index: u32,
 }
 
 fn check_2d(target: &'static str, view: &wgpu::TextureView) -> Result<(u32, u32)> {
@@ -313,24 +264,6 @@ impl Renderer {
                 settings.noise.weather_size,
                 &settings.weather,
             );
-            let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("nimbus march uniforms"),
-                size: std::mem::size_of::<MarchUniforms>() as u64,
-                usage: crate::gpu::compute::FRAME_PARAMS_USAGE,
-                mapped_at_creation: false,
-            });
-            let temporal_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("nimbus temporal uniforms"),
-                size: std::mem::size_of::<TemporalUniforms>() as u64,
-                usage: crate::gpu::compute::FRAME_PARAMS_USAGE,
-                mapped_at_creation: false,
-            });
-            let composite_uniforms = device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("nimbus composite uniforms"),
-                size: std::mem::size_of::<CompositeUniforms>() as u64,
-                usage: crate::gpu::compute::FRAME_PARAMS_USAGE,
-                mapped_at_creation: false,
-            });
             let no_depth = crate::gpu::texture_2d(
                 device,
                 "nimbus no scene depth",
@@ -342,25 +275,17 @@ impl Renderer {
             Self {
                 device: device.clone(),
                 queue: queue.clone(),
-                march_depth: MarchPipeline::new(device, DepthKind::Depth),
-                march_r32: MarchPipeline::new(device, DepthKind::R32Float),
-                temporal_depth: TemporalPipeline::new(device, DepthKind::Depth),
-                temporal_r32: TemporalPipeline::new(device, DepthKind::R32Float),
+                passes: ComputePasses::new(device),
                 composite: CompositeCache::default(),
                 timeline: Timeline::new(settings.weather.clone(), 0.0),
                 last_time: 0.0,
                 weather_maps,
                 settings,
                 noise,
-                uniforms,
-                temporal_uniforms,
-                composite_uniforms,
                 no_depth,
-                sized: None,
-                pending: None,
-                history: History::default(),
+                views: Views::new(device),
+                last_view: ViewId::DEFAULT,
                 timer: None,
-                frame_index: 0,
             }
         })
     }
@@ -423,8 +348,40 @@ impl Renderer {
     /// Drops the accumulated cloud history: the next frame starts afresh, with no
     /// reprojection. Call it on camera cuts (teleports, switching to another camera); fast
     /// motion is handled without it. Settings changes and resizes reset it themselves.
+    /// Resets every view's history (see [`Renderer::reset_view_history`] for one view).
     pub fn reset_history(&mut self) {
-        self.history.view_proj = None;
+        for v in self.views.iter_mut() {
+            v.history.view_proj = None;
+        }
+    }
+
+    /// Drops one view's accumulated cloud history (a camera cut in that view).
+    pub fn reset_view_history(&mut self, view: ViewId) -> Result<()> {
+        self.views.get_mut(view)?.history.view_proj = None;
+        Ok(())
+    }
+
+    /// Makes a new view: its own camera history and trace-grid textures (made at its first
+    /// `encode_view`, sized to its viewport), sharing this renderer's noise, weather and
+    /// pipelines. Use one view per camera that renders every frame: split-screen players, the
+    /// two eyes of a stereo pair, the faces of a reflection probe. At most
+    /// [`crate::view::MAX_VIEWS`] at once.
+    pub fn create_view(&mut self) -> Result<ViewId> {
+        self.views.create(&self.device)
+    }
+
+    /// Destroys a view made by [`Renderer::create_view`], freeing its textures (once the GPU
+    /// work that uses them has finished). Its id is refused from then on; the default view
+    /// cannot be destroyed.
+    pub fn destroy_view(&mut self, view: ViewId) -> Result<()> {
+        let state = self.views.destroy(view)?;
+        self.forget_view_binds(&state);
+        Ok(())
+    }
+
+    /// How many views exist (the default one included).
+    pub fn view_count(&self) -> usize {
+        self.views.len()
     }
 
     /// Starts a transition to `weather`, beginning at host time `start` (seconds, the clock of
@@ -470,10 +427,17 @@ impl Renderer {
         self.timeline.sample(time)
     }
 
-    /// Validates the frame inputs and computes this frame's uniforms. On error the previous
-    /// frame's state is dropped, so `encode` refuses to draw stale inputs.
+    /// Validates the frame inputs and computes this frame's uniforms, for the default view.
+    /// On error the previous frame's state is dropped, so `encode` refuses to draw stale
+    /// inputs.
     pub fn prepare(&mut self, frame: &FrameInputs) -> Result<()> {
-        self.pending = None;
+        self.prepare_view(ViewId::DEFAULT, frame)
+    }
+
+    /// [`Renderer::prepare`] for one view.
+    pub fn prepare_view(&mut self, view: ViewId, frame: &FrameInputs) -> Result<()> {
+        let state = self.views.get_mut(view)?;
+        state.pending = None;
         let (camera, sun_dir) = frame.validate()?;
         let sample = self.timeline.sample(frame.time);
         self.last_time = frame.time;
@@ -485,7 +449,7 @@ impl Renderer {
             self.settings.march.resolution.divisor(),
             false,
         );
-        self.pending = Some(Pending {
+        state.pending = Some(Pending {
             march,
             composite,
             view_proj: camera.view_proj,
@@ -497,11 +461,23 @@ impl Renderer {
         Ok(())
     }
 
-    /// Records the march, the temporal resolve (when on) and the composite into `encoder`.
-    /// Submits nothing: the host submits the encoder. One `encode` per `prepare`; with temporal
-    /// reprojection on, one renderer per view (the history belongs to one camera).
+    /// Records the march, the temporal resolve (when on) and the composite into `encoder`,
+    /// for the default view. Submits nothing: the host submits the encoder. One `encode` per
+    /// `prepare`. The history belongs to one camera: give each other camera its own view
+    /// ([`Renderer::create_view`]).
     pub fn encode(&mut self, encoder: &mut wgpu::CommandEncoder, targets: &Targets) -> Result<()> {
-        let pending = self.pending.ok_or(Error::NotPrepared)?;
+        self.encode_view(ViewId::DEFAULT, encoder, targets)
+    }
+
+    /// [`Renderer::encode`] for one view, after [`Renderer::prepare_view`] for it. Several
+    /// views may be encoded into one encoder (each has its own uniform buffers).
+    pub fn encode_view(
+        &mut self,
+        view: ViewId,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &Targets,
+    ) -> Result<()> {
+        let pending = self.views.get(view)?.pending.ok_or(Error::NotPrepared)?;
         let (mut uniforms, mut composite) = (pending.march, pending.composite);
         let checked = check_targets(targets)?;
         let has_depth = targets.depth.is_some();
@@ -512,30 +488,36 @@ impl Renderer {
         let temporal = self.settings.march.temporal;
         let pattern = temporal.pattern;
         let block = pattern.block();
-        let offset = pattern.offset(self.frame_index);
         let device = self.device.clone();
         let layout = gpu_scope(&device, || {
-            self.ensure_size(checked.size);
-            let sized = self
+            let state = self
+                .views
+                .get_mut(view)
+                .expect("the view was checked above");
+            if state.ensure_size(&device, &self.settings, checked.size) {
+                // Cached bind groups hold the old textures' views: drop them with the textures.
+                let buffers = state.buffers().map(Clone::clone);
+                forget_binds(&mut self.passes, &mut self.composite, &buffers);
+            }
+            let state = self.views.get(view).expect("the view was checked above");
+            let offset = pattern.offset(state.frame_index);
+            let sized = state
                 .sized
                 .as_ref()
                 .expect("sized textures exist after ensure_size");
             let grid = sized.grid;
-            uniforms.set_grid(grid, block, offset, self.frame_index / (block * block));
+            uniforms.set_grid(grid, block, offset, state.frame_index / (block * block));
             self.queue
-                .write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
+                .write_buffer(&state.uniforms, 0, bytemuck::bytes_of(&uniforms));
             self.queue
-                .write_buffer(&self.composite_uniforms, 0, bytemuck::bytes_of(&composite));
-            let (march, resolve) = match checked.depth_kind {
-                DepthKind::Depth => (&mut self.march_depth, &mut self.temporal_depth),
-                DepthKind::R32Float => (&mut self.march_r32, &mut self.temporal_r32),
-            };
+                .write_buffer(&state.composite_uniforms, 0, bytemuck::bytes_of(&composite));
+            let (march, resolve) = self.passes.for_depth(checked.depth_kind);
             let scene_depth = targets.depth.unwrap_or(&self.no_depth);
             let fresh = &sized.fresh;
             march.record(
                 &device,
                 encoder,
-                &self.uniforms,
+                &state.uniforms,
                 &self.noise,
                 self.weather_maps.views(),
                 scene_depth,
@@ -545,11 +527,11 @@ impl Renderer {
                 self.timer.as_ref(),
             );
             let resolved = if temporal.enabled {
-                let previous = &sized.history[self.history.current];
-                let next = &sized.history[1 - self.history.current];
+                let previous = &sized.history[state.history.current];
+                let next = &sized.history[1 - state.history.current];
                 let frame = ResolveFrame {
                     inv_view_proj: pending.inv_view_proj,
-                    prev_view_proj: self.history.view_proj,
+                    prev_view_proj: state.history.view_proj,
                     camera: pending.camera,
                     near_value: pending.near_value,
                     far_value: pending.far_value,
@@ -563,14 +545,14 @@ impl Renderer {
                     viewport: checked.rect,
                 };
                 self.queue.write_buffer(
-                    &self.temporal_uniforms,
+                    &state.temporal_uniforms,
                     0,
                     bytemuck::bytes_of(&TemporalUniforms::new(&frame)),
                 );
                 resolve.record(
                     &device,
                     encoder,
-                    &self.temporal_uniforms,
+                    &state.temporal_uniforms,
                     fresh,
                     previous,
                     scene_depth,
@@ -591,7 +573,7 @@ impl Renderer {
                 cloud_depth: &resolved.depth.view,
                 scene_depth,
                 depth_kind: checked.depth_kind,
-                uniforms: &self.composite_uniforms,
+                uniforms: &state.composite_uniforms,
                 timer: self.timer.as_ref(),
                 viewport: checked.rect,
             };
@@ -613,44 +595,16 @@ impl Renderer {
             }
         })?;
         // Only once the work is recorded does the history move on.
+        let state = self.views.get_mut(view)?;
         if temporal.enabled {
-            self.history.current = 1 - self.history.current;
-            self.history.view_proj = Some(pending.view_proj);
+            state.history.current = 1 - state.history.current;
+            state.history.view_proj = Some(pending.view_proj);
         }
-        self.history.resolved = temporal.enabled;
-        self.history.layout = Some(layout);
-        self.frame_index = self.frame_index.wrapping_add(1);
+        state.history.resolved = temporal.enabled;
+        state.history.layout = Some(layout);
+        state.frame_index = state.frame_index.wrapping_add(1);
+        self.last_view = view;
         Ok(())
-    }
-
-    /// (Re)creates the internal per-size textures: only when the target size, the trace
-    /// resolution, the pattern or temporal on/off changes. New textures drop the history.
-    fn ensure_size(&mut self, size: (u32, u32)) {
-        let divisor = self.settings.march.resolution.divisor();
-        let temporal = self.settings.march.temporal;
-        let block = temporal.pattern.block();
-        let key = (size, divisor, block, temporal.enabled);
-        if self.sized.as_ref().is_some_and(|s| s.key == key) {
-            return;
-        }
-        let grid = (size.0.div_ceil(divisor), size.1.div_ceil(divisor));
-        let sparse = (grid.0.div_ceil(block), grid.1.div_ceil(block));
-        let history = if temporal.enabled {
-            (0..2)
-                .map(|i| CloudImage::new(&self.device, &format!("history {i}"), grid))
-                .collect()
-        } else {
-            Vec::new()
-        };
-        // Cached bind groups hold the old textures' views: drop them with the textures.
-        self.clear_bind_groups();
-        self.sized = Some(SizedTextures {
-            key,
-            grid,
-            fresh: CloudImage::new(&self.device, "march", sparse),
-            history,
-        });
-        self.history = History::default();
     }
 
     /// Records GPU timestamps around the march and composite passes from now on (for
@@ -671,9 +625,13 @@ impl Renderer {
             .as_ref()
             .map(|t| t.read(&self.device))
             .transpose()?;
+        let resolved = self
+            .views
+            .get(self.last_view)
+            .is_ok_and(|v| v.history.resolved);
         // The resolve's queries keep an older frame's values when it did not run.
         Ok(times.map(|mut t| {
-            if !self.history.resolved {
+            if !resolved {
                 t.resolve_ms = 0.0;
             }
             t
@@ -681,28 +639,26 @@ impl Renderer {
     }
 
     /// Bytes of GPU memory Nimbus has allocated for textures and buffers (noise volumes with
-    /// their mips, weather maps, blue noise, per-size targets, uniforms).
+    /// their mips, weather maps, blue noise, and every view's trace-grid textures and
+    /// uniforms).
     pub fn gpu_memory_bytes(&self) -> u64 {
-        fn texture_bytes(t: &wgpu::Texture) -> u64 {
-            let bpp = t.format().block_copy_size(None).unwrap_or(4) as u64;
-            (0..t.mip_level_count())
-                .map(|m| {
-                    let s = t.size().mip_level_size(m, t.dimension());
-                    s.width as u64 * s.height as u64 * s.depth_or_array_layers as u64 * bpp
-                })
-                .sum()
-        }
-        let mut total =
-            self.noise.memory_bytes(texture_bytes) + self.weather_maps.memory_bytes(texture_bytes);
-        if let Some(s) = &self.sized {
-            for image in std::iter::once(&s.fresh).chain(&s.history) {
-                total += texture_bytes(&image.clouds.texture) + texture_bytes(&image.depth.texture);
-            }
-        }
-        total
-            + self.uniforms.size()
-            + self.temporal_uniforms.size()
-            + self.composite_uniforms.size()
+        self.shared_memory_bytes()
+            + self
+                .views
+                .iter()
+                .map(|v| v.memory_bytes(texture_bytes))
+                .sum::<u64>()
+    }
+
+    /// Bytes of GPU memory one view holds (its trace-grid textures and uniforms); the rest
+    /// of [`Renderer::gpu_memory_bytes`] is shared by all views.
+    pub fn view_memory_bytes(&self, view: ViewId) -> Result<u64> {
+        Ok(self.views.get(view)?.memory_bytes(texture_bytes))
+    }
+
+    /// Bytes of GPU memory all views share (noise volumes, weather maps, blue noise).
+    pub fn shared_memory_bytes(&self) -> u64 {
+        self.noise.memory_bytes(texture_bytes) + self.weather_maps.memory_bytes(texture_bytes)
     }
 
     /// Number of composite pipelines built so far (one per output format and mode).
@@ -711,22 +667,12 @@ impl Renderer {
     }
 
     /// Bind groups the per-frame passes have made so far. They are made when the bound
-    /// textures change (first frame, resize, settings or weather change, other host views),
-    /// never per frame: a frame loop that keeps its views keeps this number still.
+    /// textures change (first frame of a view, resize, settings or weather change, other host
+    /// views), never per frame: a frame loop that keeps its views keeps this number still.
     pub fn bind_groups_created(&self) -> u64 {
-        [
-            &self.march_depth.binds,
-            &self.march_r32.binds,
-            &self.temporal_depth.binds,
-            &self.temporal_r32.binds,
-        ]
-        .iter()
-        .map(|b| b.created())
-        .sum::<u64>()
-            + self.composite.bind_groups_created()
+        self.passes.bind_groups_created() + self.composite.bind_groups_created()
     }
 
-    /// Drops the cached bind groups, releasing the views (and textures) they hold.
     /// Drops the cached bind groups that hold the host's target views (scene depth, scene
     /// color). Call it before destroying textures whose views were passed to `encode`, so no
     /// cached bind group keeps them alive; the next frame makes new ones.
@@ -735,15 +681,13 @@ impl Renderer {
     }
 
     fn clear_bind_groups(&mut self) {
-        for b in [
-            &mut self.march_depth.binds,
-            &mut self.march_r32.binds,
-            &mut self.temporal_depth.binds,
-            &mut self.temporal_r32.binds,
-        ] {
-            b.clear();
-        }
+        self.passes.clear_bind_groups();
         self.composite.clear_bind_groups();
+    }
+
+    fn forget_view_binds(&mut self, state: &ViewState) {
+        let buffers = state.buffers().map(Clone::clone);
+        forget_binds(&mut self.passes, &mut self.composite, &buffers);
     }
 
     pub(crate) fn noise_volume(&self, which: NoiseVolume) -> &wgpu::Texture {
@@ -755,22 +699,106 @@ impl Renderer {
         self.weather_maps.textures()
     }
 
-    /// The clouds the last frame composited, on the trace grid: RGBA16F with rgb = L, a = T;
-    /// and RGBA32F (cloud depth, scene distance, samples held, -).
+    /// The clouds the last encoded view composited, on the trace grid: RGBA16F with rgb = L,
+    /// a = T; and RGBA32F (cloud depth, scene distance, samples held, -).
     pub(crate) fn march_textures(&self) -> Option<(&wgpu::Texture, &wgpu::Texture)> {
-        let s = self.sized.as_ref()?;
-        let image = if self.history.resolved {
-            &s.history[self.history.current]
+        let v = self.views.get(self.last_view).ok()?;
+        let s = v.sized.as_ref()?;
+        let image = if v.history.resolved {
+            &s.history[v.history.current]
         } else {
             &s.fresh
         };
         Some((&image.clouds.texture, &image.depth.texture))
     }
 
-    /// The last frame's sparse march depth (cloud depth, scene distance, density samples,
-    /// light samples per traced pixel) and where those pixels lie in the grid.
+    /// The last encoded view's sparse march depth (cloud depth, scene distance, density
+    /// samples, light samples per traced pixel) and where those pixels lie in the grid.
     pub(crate) fn fresh_samples(&self) -> Option<(&wgpu::Texture, TraceLayout)> {
-        let s = self.sized.as_ref()?;
-        Some((&s.fresh.depth.texture, self.history.layout?))
+        let v = self.views.get(self.last_view).ok()?;
+        let s = v.sized.as_ref()?;
+        Some((&s.fresh.depth.texture, v.history.layout?))
+    }
+}
+
+/// Bytes of one texture with all its mips.
+fn texture_bytes(t: &wgpu::Texture) -> u64 {
+    let bpp = t.format().block_copy_size(None).unwrap_or(4) as u64;
+    (0..t.mip_level_count())
+        .map(|m| {
+            let s = t.size().mip_level_size(m, t.dimension());
+            s.width as u64 * s.height as u64 * s.depth_or_array_layers as u64 * bpp
+        })
+        .sum()
+}
+
+/// Drops the bind groups made with one view's uniform buffers.
+fn forget_binds(
+    passes: &mut ComputePasses,
+    composite: &mut CompositeCache,
+    buffers: &[wgpu::Buffer],
+) {
+    for b in buffers {
+        passes.forget(b);
+        composite.forget(b);
+    }
+}
+
+/// The compute pipelines, one per scene-depth kind.
+struct ComputePasses {
+    march_depth: MarchPipeline,
+    march_r32: MarchPipeline,
+    temporal_depth: TemporalPipeline,
+    temporal_r32: TemporalPipeline,
+}
+
+impl ComputePasses {
+    fn new(device: &wgpu::Device) -> Self {
+        Self {
+            march_depth: MarchPipeline::new(device, DepthKind::Depth),
+            march_r32: MarchPipeline::new(device, DepthKind::R32Float),
+            temporal_depth: TemporalPipeline::new(device, DepthKind::Depth),
+            temporal_r32: TemporalPipeline::new(device, DepthKind::R32Float),
+        }
+    }
+
+    fn for_depth(&mut self, kind: DepthKind) -> (&mut MarchPipeline, &mut TemporalPipeline) {
+        match kind {
+            DepthKind::Depth => (&mut self.march_depth, &mut self.temporal_depth),
+            DepthKind::R32Float => (&mut self.march_r32, &mut self.temporal_r32),
+        }
+    }
+
+    fn caches(&mut self) -> [&mut crate::gpu::bind_cache::BindCache; 4] {
+        [
+            &mut self.march_depth.binds,
+            &mut self.march_r32.binds,
+            &mut self.temporal_depth.binds,
+            &mut self.temporal_r32.binds,
+        ]
+    }
+
+    fn bind_groups_created(&self) -> u64 {
+        [
+            &self.march_depth.binds,
+            &self.march_r32.binds,
+            &self.temporal_depth.binds,
+            &self.temporal_r32.binds,
+        ]
+        .iter()
+        .map(|b| b.created())
+        .sum()
+    }
+
+    fn forget(&mut self, buffer: &wgpu::Buffer) {
+        for c in self.caches() {
+            c.forget(buffer);
+        }
+    }
+
+    fn clear_bind_groups(&mut self) {
+        for c in self.caches() {
+            c.clear();
+        }
     }
 }

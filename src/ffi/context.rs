@@ -342,7 +342,7 @@ type DecodedDesc = (
 
 /// A C frame as Rust frame inputs, checked as `Renderer::prepare` checks them.
 pub(crate) fn decode_frame(frame: &NimbusFrame) -> FfiResult<FrameInputs> {
-    check_chain(frame.next, &[])?;
+    check_chain(frame.next, super::view::FRAME_CHAIN)?;
     let known = NIMBUS_DEPTH_REVERSED_Z | NIMBUS_DEPTH_INFINITE_FAR | NIMBUS_DEPTH_GL_CLIP_Z;
     if frame.depth_flags & !known != 0 {
         return Err(FfiError::arg(format!(
@@ -392,7 +392,13 @@ pub mod fuzzing {
 
     /// Decodes and checks a frame as `nimbus_context_render` does.
     pub fn decode_frame(frame: &NimbusFrame) -> NimbusResult {
-        boundary(|| super::decode_frame(frame).map(|_| NIMBUS_OK), |_, _| {})
+        boundary(
+            || {
+                super::decode_frame(frame)?;
+                super::super::view::view_of(frame.next).map(|_| NIMBUS_OK)
+            },
+            |_, _| {},
+        )
     }
 }
 
@@ -440,6 +446,11 @@ impl ContextInner {
         })
     }
 
+    /// The renderer, for the calls of other modules (views).
+    pub(crate) fn renderer_mut(&mut self) -> &mut Renderer {
+        &mut self.renderer
+    }
+
     /// The renderer and the host-device state, for the Vulkan calls.
     pub(crate) fn renderer_and_host(
         &mut self,
@@ -460,6 +471,7 @@ impl ContextInner {
 
     fn render(&mut self, frame: &NimbusFrame, targets: &NimbusTargets) -> FfiResult<NimbusResult> {
         let inputs = decode_frame(frame)?;
+        let view = super::view::view_of(frame.next)?;
         let viewport = super::types::viewport_of(targets.next)?;
         // SAFETY: texture pointers are NULL or live textures per the caller's contract.
         let scene = unsafe { targets.scene_color.as_ref() }
@@ -483,7 +495,7 @@ impl ContextInner {
             .as_ref()
             .map(|p| (p.config.width, p.config.height));
         check_c_targets(scene, depth, output, surface_size)?;
-        self.renderer.prepare(&inputs)?;
+        self.renderer.prepare_view(view, &inputs)?;
         let mut encoder = self.device.create_command_encoder(&Default::default());
         let depth_view = depth.map(|d| &d.view);
         let status = match output {
@@ -496,7 +508,8 @@ impl ContextInner {
                         output: &out.view,
                     }
                 };
-                self.renderer.encode(
+                self.renderer.encode_view(
+                    view,
                     &mut encoder,
                     &Targets {
                         color,
@@ -529,13 +542,14 @@ impl ContextInner {
                     }
                     _ => return Ok(NIMBUS_STATUS_FRAME_SKIPPED),
                 };
-                let view = frame.texture.create_view(&Default::default());
-                self.renderer.encode(
+                let surface_view = frame.texture.create_view(&Default::default());
+                self.renderer.encode_view(
+                    view,
                     &mut encoder,
                     &Targets {
                         color: ColorTargets::Separate {
                             scene: &scene.view,
-                            output: &view,
+                            output: &surface_view,
                         },
                         depth: depth_view,
                         viewport,
@@ -1004,8 +1018,9 @@ pub unsafe extern "C" fn nimbus_context_cancel_weather(
     }
 }
 
-/// Drops the accumulated cloud history, so the next frame starts afresh. Call it on camera
-/// cuts (a teleport, a switch to another camera); ordinary and fast motion need no call.
+/// Drops the accumulated cloud history of every view, so the next frames start afresh. Call
+/// it on camera cuts (a teleport, a switch to another camera); ordinary and fast motion need
+/// no call. For one view: `nimbus_context_reset_view_history`.
 ///
 /// Safety: `ctx` must be NULL or a live context.
 #[no_mangle]

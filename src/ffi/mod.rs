@@ -17,6 +17,7 @@ mod log;
 mod result;
 mod texture;
 mod types;
+mod view;
 #[cfg(not(any(target_vendor = "apple", target_arch = "wasm32")))]
 mod vulkan;
 
@@ -31,6 +32,7 @@ pub use result::NimbusResult::{self, *};
 pub use result::*;
 pub use texture::*;
 pub use types::*;
+pub use view::*;
 #[cfg(not(any(target_vendor = "apple", target_arch = "wasm32")))]
 pub use vulkan::*;
 
@@ -39,7 +41,7 @@ use crate::Error;
 /// Major version of the library; a context made with a header of another major version fails.
 pub const NIMBUS_VERSION_MAJOR: u32 = 0;
 /// Minor version.
-pub const NIMBUS_VERSION_MINOR: u32 = 3;
+pub const NIMBUS_VERSION_MINOR: u32 = 4;
 /// Patch version.
 pub const NIMBUS_VERSION_PATCH: u32 = 0;
 /// The oldest minor version of this major whose headers this library still serves.
@@ -86,7 +88,7 @@ impl From<Error> for FfiError {
             Error::InvalidWeather(_) => NIMBUS_ERROR_WEATHER,
             Error::Surface(_) => NIMBUS_ERROR_SURFACE,
             Error::Vulkan(_) => NIMBUS_ERROR_VULKAN_REQUIREMENT,
-            Error::Image(_) => NIMBUS_ERROR_INVALID_ARGUMENT,
+            Error::Image(_) | Error::InvalidView(_) => NIMBUS_ERROR_INVALID_ARGUMENT,
             Error::DeviceLost(_) => NIMBUS_ERROR_DEVICE_LOST,
         };
         let mut message = e.to_string();

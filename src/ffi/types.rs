@@ -24,9 +24,10 @@ pub const NIMBUS_STYPE_VIEWPORT: u32 = 4;
 
 /// Chained to a frame's targets: render only this rectangle of them (split screen, dynamic
 /// resolution). The frame's projection maps onto the rectangle; pixels outside it are left
-/// untouched; the scene depth is read at the same pixels. A context keeps one history: render
-/// one rectangle per frame (a change of its size starts the history afresh, moving it keeps
-/// it); for several views per frame use one context per view. Since ABI 0.3.
+/// untouched; the scene depth is read at the same pixels. The history belongs to the frame's
+/// view (`NimbusViewExt`): render each rectangle (each split-screen player) with a view of its
+/// own; a change of a view's rectangle size starts its history afresh, moving it keeps it.
+/// Since ABI 0.3.
 #[repr(C)]
 #[derive(Clone, Copy, Debug)]
 pub struct NimbusViewportExt {

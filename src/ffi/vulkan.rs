@@ -579,6 +579,7 @@ impl ContextInner {
         targets: &NimbusVulkanTargets,
     ) -> FfiResult<NimbusResult> {
         let inputs = super::context::decode_frame(frame)?;
+        let view = super::view::view_of(frame.next)?;
         let viewport = super::types::viewport_of(targets.next)?;
         if targets.color.image == 0 {
             return Err(FfiError::null("targets.color.image"));
@@ -594,7 +595,7 @@ impl ContextInner {
         unsafe {
             let images = (&color, depth.as_ref(), viewport);
             host.frame
-                .render(renderer, &inputs, images, &waits, &signals)
+                .render(renderer, view, &inputs, images, &waits, &signals)
         }?;
         self.take_device_errors()?;
         Ok(NIMBUS_OK)

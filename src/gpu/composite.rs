@@ -154,7 +154,7 @@ impl CompositeCache {
         let mut views = vec![inputs.clouds, inputs.cloud_depth, inputs.scene_depth];
         views.extend(scene);
         let pipeline = &composite.pipeline;
-        let bind = composite.binds.get(&views, || {
+        let bind = composite.binds.get(inputs.uniforms, &views, || {
             let mut entries = vec![
                 tex(0, inputs.clouds),
                 tex(2, inputs.cloud_depth),
@@ -218,6 +218,13 @@ impl CompositeCache {
     pub(crate) fn clear_bind_groups(&mut self) {
         for c in self.pipelines.values_mut() {
             c.binds.clear();
+        }
+    }
+
+    /// Drops the bind groups made with `uniforms` (one view's).
+    pub(crate) fn forget(&mut self, uniforms: &wgpu::Buffer) {
+        for c in self.pipelines.values_mut() {
+            c.binds.forget(uniforms);
         }
     }
 }

@@ -315,7 +315,7 @@ impl MarchPipeline {
             weather.1,
         ];
         let layout = &self.layout;
-        let bind = self.binds.get(&views, || {
+        let bind = self.binds.get(uniforms, &views, || {
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("nimbus march"),
                 layout,

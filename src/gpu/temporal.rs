@@ -184,7 +184,7 @@ impl TemporalPipeline {
             &out.depth.view,
         ];
         let layout = &self.layout;
-        let bind = self.binds.get(&views, || {
+        let bind = self.binds.get(uniforms, &views, || {
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("nimbus temporal"),
                 layout,

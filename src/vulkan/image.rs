@@ -566,8 +566,8 @@ impl HostFrame {
         encoder.finish()
     }
 
-    /// Validates the images, composites the clouds into `color` in place (reading `depth`; in
-    /// `viewport` only, when given),
+    /// Validates the images, composites the clouds of `view` into `color` in place (reading
+    /// `depth`; in `viewport` only, when given),
     /// leaves both in their final layouts and submits on the host's queue, waiting on and
     /// signalling the given semaphores. Nothing is submitted when a check fails.
     ///
@@ -578,6 +578,7 @@ impl HostFrame {
     pub unsafe fn render(
         &mut self,
         renderer: &mut Renderer,
+        view: crate::ViewId,
         frame: &FrameInputs,
         (color, depth, viewport): (&HostImage, Option<&HostImage>, Option<crate::Viewport>),
         waits: &[Semaphore],
@@ -609,7 +610,7 @@ impl HostFrame {
             }
         }
         let mut handoff = started.elapsed();
-        renderer.prepare(frame)?;
+        renderer.prepare_view(view, frame)?;
         let started = std::time::Instant::now();
         self.frame += 1;
         let c = self.wrap(ImageRole::Color, color, color_format);
@@ -619,7 +620,8 @@ impl HostFrame {
         };
         handoff += started.elapsed();
         let mut encoder = self.device.create_command_encoder(&Default::default());
-        renderer.encode(
+        renderer.encode_view(
+            view,
             &mut encoder,
             &Targets {
                 color: ColorTargets::InPlace(&self.wrappers[c].view),

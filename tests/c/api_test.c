@@ -434,6 +434,70 @@ static void test_owned_formats(void) {
     nimbus_texture_destroy(d16);
 }
 
+/* Since ABI 0.4: views. A probe view at a quarter of the pixels renders between the default
+ * view's frames with its own history and textures; ids are checked. */
+static void test_views(void) {
+    NimbusTexture *probe = make_texture(W / 2, H / 2, NIMBUS_FORMAT_RGBA16_FLOAT);
+    NimbusFrame f;
+    NimbusTargets t = {0};
+    NimbusViewExt ve, twice;
+    uint32_t view = 0, gone = 0;
+    uint64_t main_bytes = 0, probe_bytes = 0, before = 0, shared = 0;
+    int i;
+
+    EXPECT(nimbus_context_create_view(NULL, &view), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT(nimbus_context_create_view(ctx, NULL), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT_ON(ctx, nimbus_context_create_view(ctx, &view), NIMBUS_OK);
+    TRUE(view != NIMBUS_VIEW_DEFAULT);
+    EXPECT_ON(ctx, nimbus_context_view_memory(ctx, view, &before, NULL), NIMBUS_OK);
+    memset(&ve, 0, sizeof ve);
+    ve.chain.s_type = NIMBUS_STYPE_VIEW;
+    ve.view = view;
+    frame_defaults(&f);
+    for (i = 0; i < 4; i++) {
+        f.next = &ve.chain; t.scene_color = probe; t.output = probe;
+        EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_OK);
+        f.next = NULL; t.scene_color = scene; t.output = output;
+        EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_OK);
+    }
+    EXPECT_ON(ctx, nimbus_context_view_memory(ctx, view, &probe_bytes, &shared), NIMBUS_OK);
+    EXPECT_ON(ctx, nimbus_context_view_memory(ctx, NIMBUS_VIEW_DEFAULT, &main_bytes, NULL), NIMBUS_OK);
+    printf("     views: shared %llu B, default view %llu B (%dx%d), probe view %llu B (%dx%d)\n",
+           (unsigned long long)shared, (unsigned long long)main_bytes, W, H,
+           (unsigned long long)probe_bytes, W / 2, H / 2);
+    TRUE(probe_bytes > before && shared > 0);
+    TRUE(probe_bytes * 3 < main_bytes && probe_bytes * 5 > main_bytes);
+    EXPECT(nimbus_context_view_memory(ctx, view, NULL, &shared), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT_ON(ctx, nimbus_context_reset_view_history(ctx, view), NIMBUS_OK);
+
+    /* Bad chains and ids. */
+    f.next = &ve.chain; t.scene_color = probe; t.output = probe;
+    ve.reserved = 1;
+    EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_ARGUMENT, "reserved");
+    ve.reserved = 0;
+    twice = ve;
+    ve.chain.next = &twice.chain;
+    EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_UNKNOWN_STRUCT, "more than once");
+    ve.chain.next = NULL;
+    ve.view = 0xdeadbeefu;
+    EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_ARGUMENT, "not a live view");
+    gone = view;
+    EXPECT_ON(ctx, nimbus_context_destroy_view(ctx, view), NIMBUS_OK);
+    ve.view = gone;
+    EXPECT_MSG(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_ERROR_INVALID_ARGUMENT, "not a live view");
+    EXPECT_MSG(ctx, nimbus_context_destroy_view(ctx, gone), NIMBUS_ERROR_INVALID_ARGUMENT, "not a live view");
+    EXPECT_MSG(ctx, nimbus_context_reset_view_history(ctx, gone), NIMBUS_ERROR_INVALID_ARGUMENT, "not a live view");
+    EXPECT_MSG(ctx, nimbus_context_view_memory(ctx, gone, &probe_bytes, NULL), NIMBUS_ERROR_INVALID_ARGUMENT, "view");
+    EXPECT_MSG(ctx, nimbus_context_destroy_view(ctx, NIMBUS_VIEW_DEFAULT), NIMBUS_ERROR_INVALID_ARGUMENT, "default view");
+    EXPECT_ON(ctx, nimbus_context_create_view(ctx, &view), NIMBUS_OK);
+    TRUE(view != gone); /* the slot is reused, the id is not */
+    EXPECT_ON(ctx, nimbus_context_destroy_view(ctx, view), NIMBUS_OK);
+    /* The context still renders its default view. */
+    f.next = NULL; t.scene_color = scene; t.output = output;
+    EXPECT_ON(ctx, nimbus_context_render(ctx, &f, &t), NIMBUS_OK);
+    nimbus_texture_destroy(probe);
+}
+
 static void test_render(void) {
     NimbusFrame f;
     NimbusTargets t = {0};
@@ -844,6 +908,7 @@ int main(int argc, char **argv) {
     test_textures();
     test_render();
     test_owned_formats();
+    test_views();
     test_weather_and_resize();
     test_second_context();
     test_old_header_and_device_loss();

@@ -561,6 +561,37 @@ static void test_render_inputs(void) {
         vp.width = W; vp.chain.next = &unknown;
         BAD(t, NIMBUS_ERROR_UNKNOWN_STRUCT, NULL, "a viewport with an unknown struct after it");
     }
+    {
+        /* Since ABI 0.4: split screen on the host's images, a view per half (each its own
+         * history), then the destroyed view refused. */
+        NimbusViewportExt vp;
+        NimbusViewExt ve;
+        uint32_t view = 0;
+        int i, half;
+        memset(&vp, 0, sizeof vp);
+        memset(&ve, 0, sizeof ve);
+        vp.chain.s_type = NIMBUS_STYPE_VIEWPORT;
+        vp.width = W / 2; vp.height = H;
+        ve.chain.s_type = NIMBUS_STYPE_VIEW;
+        EXPECT_MSG(ctx, nimbus_context_create_view(ctx, &view), NIMBUS_OK, NULL);
+        ve.view = view;
+        for (i = 0; i < 3; i++) {
+            for (half = 0; half < 2; half++) {
+                good_targets(&t);
+                t.next = &vp.chain;
+                vp.x = half ? W / 2 : 0;
+                frame_defaults(&f);
+                f.next = half ? &ve.chain : NULL;
+                EXPECT_MSG(ctx, nimbus_context_render_vulkan(ctx, &f, &t), NIMBUS_OK, NULL);
+            }
+        }
+        EXPECT_MSG(ctx, nimbus_context_destroy_view(ctx, view), NIMBUS_OK, NULL);
+        good_targets(&t);
+        frame_defaults(&f);
+        f.next = &ve.chain;
+        EXPECT_MSG(ctx, nimbus_context_render_vulkan(ctx, &f, &t), NIMBUS_ERROR_INVALID_ARGUMENT, "not a live view");
+        EXPECT_MSG(ctx, good_frame_on(ctx), NIMBUS_OK, NULL);
+    }
     good_targets(&t); t.next = &unknown;
     BAD(t, NIMBUS_ERROR_UNKNOWN_STRUCT, NULL, "targets->next with s_type 999");
     good_targets(&t);
