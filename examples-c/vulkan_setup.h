@@ -580,9 +580,10 @@ typedef struct VksImage {
     VkImageLayout layout; /* where the host's command stream has left it */
 } VksImage;
 
-/* A 2D image (1 mip, 1 layer, optimal tiling) in device-local memory, layout UNDEFINED. */
-static inline int vks_image_create(VkSetup *s, VksImage *img, VkFormat format, VkImageUsageFlags usage,
-                                   uint32_t width, uint32_t height) {
+/* A 2D image with `mips` levels and `layers` layers (optimal tiling) in device-local memory,
+ * layout UNDEFINED. */
+static inline int vks_image_create_levels(VkSetup *s, VksImage *img, VkFormat format, VkImageUsageFlags usage,
+                                          uint32_t width, uint32_t height, uint32_t mips, uint32_t layers) {
     VkImageCreateInfo ci;
     VkMemoryRequirements mr;
     VkMemoryAllocateInfo ai;
@@ -595,8 +596,8 @@ static inline int vks_image_create(VkSetup *s, VksImage *img, VkFormat format, V
     ci.extent.width = width;
     ci.extent.height = height;
     ci.extent.depth = 1;
-    ci.mipLevels = 1;
-    ci.arrayLayers = 1;
+    ci.mipLevels = mips;
+    ci.arrayLayers = layers;
     ci.samples = VK_SAMPLE_COUNT_1_BIT;
     ci.tiling = VK_IMAGE_TILING_OPTIMAL;
     ci.usage = usage;
@@ -625,6 +626,12 @@ static inline int vks_image_create(VkSetup *s, VksImage *img, VkFormat format, V
     img->aspect = vks_format_aspect(format);
     img->layout = VK_IMAGE_LAYOUT_UNDEFINED;
     return 0;
+}
+
+/* A 2D image (1 mip, 1 layer, optimal tiling) in device-local memory, layout UNDEFINED. */
+static inline int vks_image_create(VkSetup *s, VksImage *img, VkFormat format, VkImageUsageFlags usage,
+                                   uint32_t width, uint32_t height) {
+    return vks_image_create_levels(s, img, format, usage, width, height, 1, 1);
 }
 
 static inline void vks_image_destroy(VkSetup *s, VksImage *img) {

@@ -690,7 +690,9 @@ typedef struct NimbusVulkanImage {
    */
   uint32_t array_layers;
   /*
-   The mip Nimbus uses: must be 0.
+   The mip Nimbus uses, below `mip_levels` (0.3 libraries accepted only 0). Its size is
+   mip 0's halved per level (at least 1); color and depth are compared at their used mips,
+   and a viewport lies within the used mip.
    */
   uint32_t mip_level;
   /*

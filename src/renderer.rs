@@ -110,9 +110,25 @@ pub struct Renderer {
     timer: Option<GpuTimer>,
 }
 
-fn check_2d(target: &'static str, view: &wgpu::TextureView) -> Result<(u32, u32)> {
+/// Which subresource of each target the views show, for callers that make their own views
+/// (the host Vulkan path: any mip, one layer of an array image). The public path is mip 0 of
+/// a single-layer texture: wgpu does not tell a view's mip.
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct TargetMips {
+    pub color: u32,
+    pub depth: u32,
+    /// The textures may have several layers (the views show one).
+    pub layered: bool,
+}
+
+fn check_2d(
+    target: &'static str,
+    view: &wgpu::TextureView,
+    mip: u32,
+    layered: bool,
+) -> Result<(u32, u32)> {
     let t = view.texture();
-    if t.dimension() != wgpu::TextureDimension::D2 || t.depth_or_array_layers() != 1 {
+    if t.dimension() != wgpu::TextureDimension::D2 || (!layered && t.depth_or_array_layers() != 1) {
         return Err(invalid_target(target, "must be a single-layer 2D texture"));
     }
     if t.sample_count() != 1 {
@@ -121,7 +137,14 @@ fn check_2d(target: &'static str, view: &wgpu::TextureView) -> Result<(u32, u32)
             "must not be multisampled (resolve it first)",
         ));
     }
-    Ok((t.width(), t.height()))
+    if mip >= t.mip_level_count() {
+        return Err(invalid_target(
+            target,
+            format!("has no mip {mip} ({} levels)", t.mip_level_count()),
+        ));
+    }
+    let size = t.size().mip_level_size(mip, wgpu::TextureDimension::D2);
+    Ok((size.width, size.height))
 }
 
 fn check_usage(
@@ -177,12 +200,12 @@ struct CheckedTargets {
     depth_kind: DepthKind,
 }
 
-fn check_targets(t: &Targets) -> Result<CheckedTargets> {
+fn check_targets(t: &Targets, mips: TargetMips) -> Result<CheckedTargets> {
     let use_render = wgpu::TextureUsages::RENDER_ATTACHMENT;
     let use_sample = wgpu::TextureUsages::TEXTURE_BINDING;
     let (size, output_format) = match t.color {
         ColorTargets::InPlace(view) => {
-            let size = check_2d("output", view)?;
+            let size = check_2d("output", view, mips.color, mips.layered)?;
             let format = check_format("output", view, OUTPUT_FORMATS, OUTPUT_NAMES)?;
             if format == F::Rgba32Float {
                 return Err(Error::UnsupportedFormat {
@@ -195,10 +218,14 @@ fn check_targets(t: &Targets) -> Result<CheckedTargets> {
             (size, format)
         }
         ColorTargets::Separate { scene, output } => {
-            let size = check_2d("output", output)?;
+            let size = check_2d("output", output, mips.color, mips.layered)?;
             let format = check_format("output", output, OUTPUT_FORMATS, OUTPUT_NAMES)?;
             check_usage("output", output, use_render)?;
-            check_size("scene_color", check_2d("scene_color", scene)?, size)?;
+            check_size(
+                "scene_color",
+                check_2d("scene_color", scene, mips.color, mips.layered)?,
+                size,
+            )?;
             check_format("scene_color", scene, OUTPUT_FORMATS, OUTPUT_NAMES)?;
             check_usage("scene_color", scene, use_sample)?;
             if scene.texture() == output.texture() {
@@ -216,7 +243,11 @@ fn check_targets(t: &Targets) -> Result<CheckedTargets> {
     let depth_kind = match t.depth {
         None => DepthKind::Depth,
         Some(view) => {
-            check_size("scene_depth", check_2d("scene_depth", view)?, size)?;
+            check_size(
+                "scene_depth",
+                check_2d("scene_depth", view, mips.depth, mips.layered)?,
+                size,
+            )?;
             let format = check_format("scene_depth", view, DEPTH_FORMATS, DEPTH_NAMES)?;
             check_usage("scene_depth", view, use_sample)?;
             if format == F::R32Float {
@@ -477,9 +508,20 @@ impl Renderer {
         encoder: &mut wgpu::CommandEncoder,
         targets: &Targets,
     ) -> Result<()> {
+        self.encode_view_at(view, encoder, targets, TargetMips::default())
+    }
+
+    /// [`Renderer::encode_view`] on views of the given mips (and layers).
+    pub(crate) fn encode_view_at(
+        &mut self,
+        view: ViewId,
+        encoder: &mut wgpu::CommandEncoder,
+        targets: &Targets,
+        mips: TargetMips,
+    ) -> Result<()> {
         let pending = self.views.get(view)?.pending.ok_or(Error::NotPrepared)?;
         let (mut uniforms, mut composite) = (pending.march, pending.composite);
-        let checked = check_targets(targets)?;
+        let checked = check_targets(targets, mips)?;
         let has_depth = targets.depth.is_some();
         uniforms.set_has_depth(has_depth);
         composite.set_has_depth(has_depth);

@@ -111,7 +111,9 @@ pub struct NimbusVulkanImage {
     pub mip_levels: u32,
     /// The image's layer count (0 counts as 1).
     pub array_layers: u32,
-    /// The mip Nimbus uses: must be 0.
+    /// The mip Nimbus uses, below `mip_levels` (0.3 libraries accepted only 0). Its size is
+    /// mip 0's halved per level (at least 1); color and depth are compared at their used mips,
+    /// and a viewport lies within the used mip.
     pub mip_level: u32,
     /// The layer Nimbus uses.
     pub array_layer: u32,

@@ -45,7 +45,8 @@ pub struct HostImage {
     pub mip_levels: u32,
     /// Its layer count (0 counts as 1).
     pub array_layers: u32,
-    /// The mip Nimbus uses: 0 (Nimbus composites into mip 0).
+    /// The mip Nimbus uses (below `mip_levels`); its size is mip 0's halved per level, at
+    /// least 1. Color and depth are compared at their used mips.
     pub mip_level: u32,
     /// The layer Nimbus uses.
     pub array_layer: u32,
@@ -209,8 +210,15 @@ struct HostImageShape {
     image: vk::Image,
     format: vk::Format,
     size: (u32, u32, u32, u32),
+    mip_level: u32,
     array_layer: u32,
     usage: vk::ImageUsageFlags,
+}
+
+/// The size of the mip an image is used at.
+fn used_size(image: &HostImage) -> (u32, u32) {
+    let at = |side: u32| (side >> image.mip_level.min(31)).max(1);
+    (at(image.width), at(image.height))
 }
 
 /// Wrappers kept at most: two images a frame, a few frames in flight, with room to spare.
@@ -329,12 +337,11 @@ impl HostFrame {
         }
         let mips = image.mip_levels.max(1);
         let layers = image.array_layers.max(1);
-        if image.mip_level != 0 || mips > 15 {
+        if image.mip_level >= mips || mips > 15 {
             return Err(bad(
                 role,
                 format!(
-                    "mip_level {} of {mips} mip levels: Nimbus composites into mip 0 (mip_level \
-                     must be 0, mip_levels at most 15)",
+                    "mip_level {} is out of range of {mips} mip level(s) (at most 15)",
                     image.mip_level
                 ),
             ));
@@ -409,6 +416,7 @@ impl HostFrame {
                 image.mip_levels.max(1),
                 image.array_layers.max(1),
             ),
+            mip_level: image.mip_level,
             array_layer: image.array_layer,
             usage: image.usage,
         };
@@ -512,7 +520,7 @@ impl HostFrame {
                 ImageRole::Color => wgpu::TextureAspect::All,
                 ImageRole::Depth => wgpu::TextureAspect::DepthOnly,
             },
-            base_mip_level: 0,
+            base_mip_level: image.mip_level,
             mip_level_count: Some(1),
             base_array_layer: image.array_layer,
             array_layer_count: Some(1),
@@ -591,12 +599,14 @@ impl HostFrame {
             None => None,
         };
         if let Some(d) = depth {
-            if (d.width, d.height) != (color.width, color.height) {
+            let (ds, cs) = (used_size(d), used_size(color));
+            if ds != cs {
                 return Err(bad(
                     ImageRole::Depth,
                     format!(
-                        "has size {}x{} but color is {}x{}: both images must have one size",
-                        d.width, d.height, color.width, color.height
+                        "has size {}x{} at mip {} but color is {}x{} at mip {}: the used mips \
+                         must have one size",
+                        ds.0, ds.1, d.mip_level, cs.0, cs.1, color.mip_level
                     ),
                 ));
             }
@@ -620,7 +630,7 @@ impl HostFrame {
         };
         handoff += started.elapsed();
         let mut encoder = self.device.create_command_encoder(&Default::default());
-        renderer.encode_view(
+        renderer.encode_view_at(
             view,
             &mut encoder,
             &Targets {
@@ -628,12 +638,17 @@ impl HostFrame {
                 depth: d.map(|i| &self.wrappers[i].view),
                 viewport,
             },
+            crate::renderer::TargetMips {
+                color: color.mip_level,
+                depth: depth.map_or(0, |d| d.mip_level),
+                layered: true,
+            },
         )?;
         let started = std::time::Instant::now();
         let transition = |i: usize, image: &HostImage| wgpu::TextureTransition {
             texture: &self.wrappers[i].texture,
             selector: Some(wgpu::wgt::TextureSelector {
-                mips: 0..1,
+                mips: image.mip_level..image.mip_level + 1,
                 layers: image.array_layer..image.array_layer + 1,
             }),
             state: state_of(final_layout(image)),

@@ -712,6 +712,174 @@ static void test_layouts_and_semaphores(void) {
     EXPECT_MSG(ctx, good_frame_on(ctx), NIMBUS_OK, NULL);
 }
 
+/* ---- since ABI 0.4: one mip and one layer of a bigger image ----------------------------------- */
+
+/* A barrier over mips [mip, mip + mips) and layers [layer, layer + layers) of `image`. */
+static void levels_barrier(VkCommandBuffer cmd, VkImage image, uint32_t mip, uint32_t mips, uint32_t layer,
+                           uint32_t layers, VkImageLayout from, VkImageLayout to) {
+    VkImageMemoryBarrier b;
+    VkPipelineStageFlags src, dst;
+    memset(&b, 0, sizeof b);
+    b.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER;
+    vks_layout_scope(from, 1, &src, &b.srcAccessMask);
+    vks_layout_scope(to, 0, &dst, &b.dstAccessMask);
+    b.oldLayout = from;
+    b.newLayout = to;
+    b.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
+    b.image = image;
+    b.subresourceRange.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
+    b.subresourceRange.baseMipLevel = mip;
+    b.subresourceRange.levelCount = mips;
+    b.subresourceRange.baseArrayLayer = layer;
+    b.subresourceRange.layerCount = layers;
+    vkCmdPipelineBarrier(cmd, src, dst, 0, 0, NULL, 0, NULL, 1, &b);
+}
+
+/* A 2W x 2H image with 2 mips and 2 layers: Nimbus composites into mip 1 (W x H) of layer 1,
+ * reading the W x H depth image. That subresource must equal the same frame composited into
+ * the plain W x H color image (each on a fresh view, so both are a first frame), and the three
+ * other subresources must keep their clear colors exactly. */
+static void test_mips_and_layers(void) {
+    static const float clears[4][4] = {
+        {0.9f, 0.1f, 0.1f, 1.0f}, {0.1f, 0.9f, 0.1f, 1.0f}, {0.1f, 0.1f, 0.9f, 1.0f}, {0.2f, 0.35f, 0.7f, 1.0f}};
+    const VkImageLayout att = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, src = VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                        dst = VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL;
+    VksImage big;
+    VksBuffer back;
+    VkCommandBuffer cmd;
+    VkBufferImageCopy regions[4];
+    VkImageSubresourceRange range;
+    VkClearColorValue clear;
+    NimbusVulkanTargets t;
+    NimbusFrame f;
+    NimbusViewExt ve;
+    uint32_t views[2] = {0, 0}, m, l, k, c;
+    VkDeviceSize offsets[4], at = 0;
+    size_t i, kept = 0, keep_total = 0, clouded = 0;
+    const uint16_t *px;
+
+    if (vks_image_create_levels(&G, &big, color.format,
+                                VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT | VK_IMAGE_USAGE_SAMPLED_BIT |
+                                    VK_IMAGE_USAGE_TRANSFER_SRC_BIT | VK_IMAGE_USAGE_TRANSFER_DST_BIT,
+                                2 * W, 2 * H, 2, 2)) {
+        printf("FAIL: %s\n", G.error);
+        failures++;
+        return;
+    }
+    for (k = 0; k < 4; k++) { /* k = mip * 2 + layer */
+        offsets[k] = at;
+        at += (VkDeviceSize)((2 * W) >> (k / 2)) * ((2 * H) >> (k / 2)) * 8;
+    }
+    if (vks_buffer_create(&G, &back, at, VK_BUFFER_USAGE_TRANSFER_DST_BIT)) {
+        printf("FAIL: %s\n", G.error);
+        failures++;
+        vks_image_destroy(&G, &big);
+        return;
+    }
+    /* Clear each subresource of the big image, and the plain image with mip 1 / layer 1's color. */
+    cmd = vks_begin_once(&G);
+    levels_barrier(cmd, big.image, 0, 2, 0, 2, VK_IMAGE_LAYOUT_UNDEFINED, dst);
+    memset(&range, 0, sizeof range);
+    range.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
+    range.levelCount = 1;
+    range.layerCount = 1;
+    for (k = 0; k < 4; k++) {
+        range.baseMipLevel = k / 2;
+        range.baseArrayLayer = k % 2;
+        memcpy(clear.float32, clears[k], sizeof clear.float32);
+        vkCmdClearColorImage(cmd, big.image, dst, &clear, 1, &range);
+    }
+    levels_barrier(cmd, big.image, 0, 2, 0, 2, dst, att);
+    vks_transition(cmd, &color, dst);
+    range.baseMipLevel = 0;
+    range.baseArrayLayer = 0;
+    memcpy(clear.float32, clears[3], sizeof clear.float32);
+    vkCmdClearColorImage(cmd, color.image, dst, &clear, 1, &range);
+    vks_transition(cmd, &color, att);
+    TRUE(vks_end_once(&G, cmd) == 0);
+
+    EXPECT_MSG(ctx, nimbus_context_create_view(ctx, &views[0]), NIMBUS_OK, NULL);
+    EXPECT_MSG(ctx, nimbus_context_create_view(ctx, &views[1]), NIMBUS_OK, NULL);
+    memset(&ve, 0, sizeof ve);
+    ve.chain.s_type = NIMBUS_STYPE_VIEW;
+    frame_defaults(&f);
+    f.next = &ve.chain;
+    /* The plain image. */
+    good_targets(&t);
+    t.color.final_layout = (uint32_t)src;
+    ve.view = views[0];
+    EXPECT_MSG(ctx, nimbus_context_render_vulkan(ctx, &f, &t), NIMBUS_OK, NULL);
+    color.layout = src;
+    /* Mip 1 of layer 1. */
+    good_targets(&t);
+    t.color = vks_nimbus_image(&big, src);
+    t.color.mip_levels = 2;
+    t.color.array_layers = 2;
+    t.color.mip_level = 1;
+    t.color.array_layer = 1;
+    t.color.layout = (uint32_t)att;
+    ve.view = views[1];
+    EXPECT_MSG(ctx, nimbus_context_render_vulkan(ctx, &f, &t), NIMBUS_OK, NULL);
+    /* Out of range, and sizes compared at the used mips. */
+    t.color.mip_level = 2;
+    EXPECT_MSG(ctx, nimbus_context_render_vulkan(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET, "mip_level 2");
+    t.color.mip_level = 0;
+    t.color.layout = (uint32_t)att;
+    EXPECT_MSG(ctx, nimbus_context_render_vulkan(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET, "at mip 0");
+    t.color.mip_level = 1;
+    t.color.array_layer = 2;
+    EXPECT_MSG(ctx, nimbus_context_render_vulkan(ctx, &f, &t), NIMBUS_ERROR_INVALID_TARGET, "array_layer 2");
+    EXPECT_MSG(ctx, nimbus_context_destroy_view(ctx, views[0]), NIMBUS_OK, NULL);
+    EXPECT_MSG(ctx, nimbus_context_destroy_view(ctx, views[1]), NIMBUS_OK, NULL);
+    EXPECT_MSG(ctx, nimbus_context_release_vulkan_images(ctx), NIMBUS_OK, NULL);
+
+    /* Read back every subresource: mip 1 / layer 1 is in TRANSFER_SRC, the rest still in
+     * COLOR_ATTACHMENT (Nimbus touched only what it was given). */
+    cmd = vks_begin_once(&G);
+    levels_barrier(cmd, big.image, 0, 1, 0, 2, att, src);
+    levels_barrier(cmd, big.image, 1, 1, 0, 1, att, src);
+    memset(regions, 0, sizeof regions);
+    for (k = 0; k < 4; k++) {
+        regions[k].bufferOffset = offsets[k];
+        regions[k].imageSubresource.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
+        regions[k].imageSubresource.mipLevel = k / 2;
+        regions[k].imageSubresource.baseArrayLayer = k % 2;
+        regions[k].imageSubresource.layerCount = 1;
+        regions[k].imageExtent.width = (2 * W) >> (k / 2);
+        regions[k].imageExtent.height = (2 * H) >> (k / 2);
+        regions[k].imageExtent.depth = 1;
+    }
+    vkCmdCopyImageToBuffer(cmd, big.image, src, back.buffer, 4, regions);
+    TRUE(vks_end_once(&G, cmd) == 0);
+    TRUE(vks_read_color(&G, &color, &readback, NULL) == 0);
+    for (k = 0; k < 3; k++) {
+        m = k / 2;
+        l = k % 2;
+        px = (const uint16_t *)((const uint8_t *)back.mapped + offsets[k]);
+        for (i = 0; i < (size_t)((2 * W) >> m) * ((2 * H) >> m); i++) {
+            int same = 1;
+            for (c = 0; c < 4; c++)
+                if (px[i * 4 + c] != vks_float_to_half(clears[k][c])) same = 0;
+            kept += (size_t)same;
+            keep_total++;
+        }
+        (void)l;
+    }
+    px = (const uint16_t *)((const uint8_t *)back.mapped + offsets[3]);
+    for (i = 0; i < (size_t)W * H; i++)
+        for (c = 0; c < 3; c++)
+            if (px[i * 4 + c] != vks_float_to_half(clears[3][c])) { clouded++; break; }
+    printf("     mip 1 of layer 1: %zu of %d pixels with clouds, %s the plain image's; other subresources: %zu of %zu pixels kept\n",
+           clouded, W * H, memcmp(px, readback.mapped, (size_t)W * H * 8) == 0 ? "identical to" : "DIFFERENT from",
+           kept, keep_total);
+    TRUE(memcmp(px, readback.mapped, (size_t)W * H * 8) == 0);
+    TRUE(clouded > (size_t)W * H / 4);
+    TRUE(kept == keep_total);
+    vks_buffer_destroy(&G, &back);
+    vks_image_destroy(&G, &big);
+}
+
 /* ---- an owned context has no host device ----------------------------------------------------- */
 static void test_owned_context(void) {
     NimbusContextDesc desc = {0};
@@ -883,6 +1051,7 @@ int main(int argc, char **argv) {
 
     test_render_inputs();
     test_layouts_and_semaphores();
+    test_mips_and_layers();
     vks_wait_idle(&G);
     printf("     queue lock: %ld lock and %ld unlock calls, %ld out of order\n", lock_calls, unlock_calls, lock_errors);
     TRUE(lock_calls > 0 && lock_calls == unlock_calls && lock_errors == 0 && lock_depth == 0);
