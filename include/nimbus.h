@@ -705,7 +705,10 @@ typedef struct NimbusVulkanImage {
    */
   uint32_t usage;
   /*
-   The `VkImageLayout` the used mip and layer are in when Nimbus's work runs.
+   The `VkImageLayout` the used mip and layer are in when Nimbus's work runs. Color:
+   `COLOR_ATTACHMENT`, `SHADER_READ_ONLY`, `TRANSFER_SRC` / `_DST` (`_OPTIMAL`), and since
+   0.4 `PRESENT_SRC_KHR` and `GENERAL`; depth: `DEPTH_STENCIL_ATTACHMENT`,
+   `DEPTH_STENCIL_READ_ONLY`, `TRANSFER_SRC` / `_DST` (`_OPTIMAL`), and since 0.4 `GENERAL`.
    */
   uint32_t layout;
   /*

@@ -120,7 +120,10 @@ pub struct NimbusVulkanImage {
     /// The `VkImageUsageFlags` it was created with. Color needs `COLOR_ATTACHMENT`, depth
     /// `SAMPLED`, and each layout the usage docs/c-api.md lists for it.
     pub usage: u32,
-    /// The `VkImageLayout` the used mip and layer are in when Nimbus's work runs.
+    /// The `VkImageLayout` the used mip and layer are in when Nimbus's work runs. Color:
+    /// `COLOR_ATTACHMENT`, `SHADER_READ_ONLY`, `TRANSFER_SRC` / `_DST` (`_OPTIMAL`), and since
+    /// 0.4 `PRESENT_SRC_KHR` and `GENERAL`; depth: `DEPTH_STENCIL_ATTACHMENT`,
+    /// `DEPTH_STENCIL_READ_ONLY`, `TRANSFER_SRC` / `_DST` (`_OPTIMAL`), and since 0.4 `GENERAL`.
     pub layout: u32,
     /// The layout to leave them in; 0 (`VK_IMAGE_LAYOUT_UNDEFINED`): the same as `layout`.
     pub final_layout: u32,

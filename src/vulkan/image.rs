@@ -112,7 +112,39 @@ pub const ACCEPTED_LAYOUTS: &[(ImageRole, vk::ImageLayout, vk::ImageUsageFlags)]
         vk::ImageLayout::TRANSFER_DST_OPTIMAL,
         vk::ImageUsageFlags::TRANSFER_DST,
     ),
+    // Layouts wgpu has no state for: Nimbus moves the image between them and a stand-in
+    // (`wgpu_layout`) with barriers of its own at the start and end of its work.
+    (
+        ImageRole::Color,
+        vk::ImageLayout::PRESENT_SRC_KHR,
+        vk::ImageUsageFlags::empty(),
+    ),
+    (
+        ImageRole::Color,
+        vk::ImageLayout::GENERAL,
+        vk::ImageUsageFlags::empty(),
+    ),
+    (
+        ImageRole::Depth,
+        vk::ImageLayout::GENERAL,
+        vk::ImageUsageFlags::empty(),
+    ),
 ];
+
+/// The layout wgpu is told the image is in for a host layout: the layout itself, or for the
+/// layouts wgpu has no state for (PRESENT_SRC_KHR, GENERAL) the one Nimbus uses the image in,
+/// which Nimbus's own first and last barriers move it from and to.
+fn wgpu_layout(role: ImageRole, layout: vk::ImageLayout) -> vk::ImageLayout {
+    match (role, layout) {
+        (ImageRole::Color, vk::ImageLayout::PRESENT_SRC_KHR | vk::ImageLayout::GENERAL) => {
+            vk::ImageLayout::COLOR_ATTACHMENT_OPTIMAL
+        }
+        (ImageRole::Depth, vk::ImageLayout::GENERAL) => {
+            vk::ImageLayout::DEPTH_STENCIL_READ_ONLY_OPTIMAL
+        }
+        _ => layout,
+    }
+}
 
 /// The wgpu state of a layout (wgpu-hal's `derive_image_layout`, inverted).
 fn state_of(layout: vk::ImageLayout) -> wgpu::TextureUses {
@@ -213,6 +245,33 @@ struct HostImageShape {
     mip_level: u32,
     array_layer: u32,
     usage: vk::ImageUsageFlags,
+}
+
+/// A layout transition Nimbus records itself (to or from a layout wgpu has no state for).
+struct LayoutMove {
+    image: vk::Image,
+    range: vk::ImageSubresourceRange,
+    from: vk::ImageLayout,
+    to: vk::ImageLayout,
+}
+
+/// The used mip and layer of an image, with every aspect of its format (a layout
+/// transition of a depth-stencil image covers both aspects).
+fn subresource(role: ImageRole, image: &HostImage) -> vk::ImageSubresourceRange {
+    let aspect = match (role, image.format) {
+        (ImageRole::Color, _) => vk::ImageAspectFlags::COLOR,
+        (_, vk::Format::D24_UNORM_S8_UINT | vk::Format::D32_SFLOAT_S8_UINT) => {
+            vk::ImageAspectFlags::DEPTH | vk::ImageAspectFlags::STENCIL
+        }
+        _ => vk::ImageAspectFlags::DEPTH,
+    };
+    vk::ImageSubresourceRange {
+        aspect_mask: aspect,
+        base_mip_level: image.mip_level,
+        level_count: 1,
+        base_array_layer: image.array_layer,
+        layer_count: 1,
+    }
 }
 
 /// The size of the mip an image is used at.
@@ -422,7 +481,7 @@ impl HostFrame {
         };
         let key = (role, shape);
         let slot = match self.wrappers.iter().position(|w| w.key == key) {
-            Some(i) if self.wrappers[i].layout == image.layout => {
+            Some(i) if self.wrappers[i].layout == wgpu_layout(role, image.layout) => {
                 self.wrappers[i].last_used = self.frame;
                 return i;
             }
@@ -511,7 +570,7 @@ impl HostFrame {
                     usage,
                     view_formats: &[],
                 },
-                state_of(image.layout),
+                state_of(wgpu_layout(role, image.layout)),
             )
         };
         let view = texture.create_view(&wgpu::TextureViewDescriptor {
@@ -531,7 +590,7 @@ impl HostFrame {
             key,
             texture,
             view,
-            layout: image.layout,
+            layout: wgpu_layout(role, image.layout),
             last_used: self.frame,
         };
         match slot {
@@ -548,13 +607,28 @@ impl HostFrame {
 
     /// A command buffer holding one global memory barrier, ALL_COMMANDS / MEMORY_WRITE to
     /// ALL_COMMANDS / MEMORY_READ | MEMORY_WRITE: it orders Nimbus's work after everything
-    /// submitted before it on the queue, and everything after it behind Nimbus's work.
-    fn global_barrier(&self) -> wgpu::CommandBuffer {
+    /// submitted before it on the queue, and everything after it behind Nimbus's work. With
+    /// it, the layout transitions wgpu cannot make (`layouts`: image, subresource, from, to).
+    fn global_barrier(&self, layouts: &[LayoutMove]) -> wgpu::CommandBuffer {
         let mut encoder = self.device.create_command_encoder(&Default::default());
         let barrier = vk::MemoryBarrier::default()
             .src_access_mask(vk::AccessFlags::MEMORY_WRITE)
             .dst_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE);
-        // SAFETY: a plain barrier recorded into the open raw command buffer of an encoder that
+        let images: Vec<vk::ImageMemoryBarrier> = layouts
+            .iter()
+            .map(|m| {
+                vk::ImageMemoryBarrier::default()
+                    .src_access_mask(vk::AccessFlags::MEMORY_WRITE)
+                    .dst_access_mask(vk::AccessFlags::MEMORY_READ | vk::AccessFlags::MEMORY_WRITE)
+                    .old_layout(m.from)
+                    .new_layout(m.to)
+                    .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                    .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                    .image(m.image)
+                    .subresource_range(m.range)
+            })
+            .collect();
+        // SAFETY: plain barriers recorded into the open raw command buffer of an encoder that
         // records nothing else (wgpu forbids mixing raw and wgpu encoding in one encoder).
         unsafe {
             encoder.as_hal_mut::<hv::Api, _, _>(|e| {
@@ -566,7 +640,7 @@ impl HostFrame {
                         vk::DependencyFlags::empty(),
                         &[barrier],
                         &[],
-                        &[],
+                        &images,
                     );
                 }
             })
@@ -645,22 +719,45 @@ impl HostFrame {
             },
         )?;
         let started = std::time::Instant::now();
-        let transition = |i: usize, image: &HostImage| wgpu::TextureTransition {
+        let transition = |i: usize, image: &HostImage, role| wgpu::TextureTransition {
             texture: &self.wrappers[i].texture,
             selector: Some(wgpu::wgt::TextureSelector {
                 mips: image.mip_level..image.mip_level + 1,
                 layers: image.array_layer..image.array_layer + 1,
             }),
-            state: state_of(final_layout(image)),
+            state: state_of(wgpu_layout(role, final_layout(image))),
         };
-        let mut transitions = vec![transition(c, color)];
+        let mut transitions = vec![transition(c, color, ImageRole::Color)];
         if let (Some(i), Some(image)) = (d, depth) {
-            transitions.push(transition(i, image));
+            transitions.push(transition(i, image, ImageRole::Depth));
         }
         encoder.transition_resources(std::iter::empty(), transitions.into_iter());
         let work = encoder.finish();
-        let before = self.global_barrier();
-        let after = self.global_barrier();
+        let mut entry = Vec::new();
+        let mut exit = Vec::new();
+        for (role, image) in [(ImageRole::Color, Some(color)), (ImageRole::Depth, depth)] {
+            let Some(image) = image else { continue };
+            let range = subresource(role, image);
+            let (from, to) = (image.layout, final_layout(image));
+            if wgpu_layout(role, from) != from {
+                entry.push(LayoutMove {
+                    image: image.image,
+                    range,
+                    from,
+                    to: wgpu_layout(role, from),
+                });
+            }
+            if wgpu_layout(role, to) != to {
+                exit.push(LayoutMove {
+                    image: image.image,
+                    range,
+                    from: wgpu_layout(role, to),
+                    to,
+                });
+            }
+        }
+        let before = self.global_barrier(&entry);
+        let after = self.global_barrier(&exit);
         {
             // SAFETY: the host's semaphores are live (caller's contract); they are consumed by
             // the submit just below, which nothing can precede.
@@ -682,9 +779,9 @@ impl HostFrame {
         crate::device::gpu_scope(&self.device, || {
             self.queue.submit([before, work, after]);
         })?;
-        self.wrappers[c].layout = final_layout(color);
+        self.wrappers[c].layout = wgpu_layout(ImageRole::Color, final_layout(color));
         if let (Some(i), Some(image)) = (d, depth) {
-            self.wrappers[i].layout = final_layout(image);
+            self.wrappers[i].layout = wgpu_layout(ImageRole::Depth, final_layout(image));
         }
         Ok(())
     }

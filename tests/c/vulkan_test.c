@@ -497,16 +497,16 @@ static void test_render_inputs(void) {
     BAD(t, NIMBUS_ERROR_INVALID_TARGET, "layer", "color array_layer 1 of 1");
 
     /* Layouts outside the accepted sets, as entry and as final. */
-    good_targets(&t); t.color.layout = VK_IMAGE_LAYOUT_GENERAL;
-    BAD(t, NIMBUS_ERROR_INVALID_TARGET, "layout", "color layout GENERAL");
-    good_targets(&t); t.color.final_layout = VK_IMAGE_LAYOUT_PRESENT_SRC_KHR;
-    BAD(t, NIMBUS_ERROR_INVALID_TARGET, "layout", "color final_layout PRESENT_SRC_KHR");
+    good_targets(&t); t.color.layout = VK_IMAGE_LAYOUT_PREINITIALIZED;
+    BAD(t, NIMBUS_ERROR_INVALID_TARGET, "layout", "color layout PREINITIALIZED");
+    good_targets(&t); t.color.final_layout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL;
+    BAD(t, NIMBUS_ERROR_INVALID_TARGET, "layout", "color final_layout DEPTH_STENCIL_READ_ONLY");
     good_targets(&t); t.color.layout = VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL;
     BAD(t, NIMBUS_ERROR_INVALID_TARGET, "layout", "color layout DEPTH_STENCIL_ATTACHMENT");
     good_targets(&t); t.color.final_layout = VK_IMAGE_LAYOUT_PREINITIALIZED;
     BAD(t, NIMBUS_ERROR_INVALID_TARGET, "layout", "color final_layout PREINITIALIZED");
-    good_targets(&t); t.depth.layout = VK_IMAGE_LAYOUT_GENERAL;
-    BAD(t, NIMBUS_ERROR_INVALID_TARGET, "layout", "depth layout GENERAL");
+    good_targets(&t); t.depth.layout = VK_IMAGE_LAYOUT_PRESENT_SRC_KHR;
+    BAD(t, NIMBUS_ERROR_INVALID_TARGET, "layout", "depth layout PRESENT_SRC_KHR (color only)");
     good_targets(&t); t.depth.final_layout = VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL;
     BAD(t, NIMBUS_ERROR_INVALID_TARGET, "layout", "depth final_layout SHADER_READ_ONLY (color only)");
     good_targets(&t); t.depth.layout = VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL;
@@ -638,6 +638,14 @@ static void test_layouts_and_semaphores(void) {
          VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL},
         {VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
          VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL},
+        /* Since ABI 0.4: the layouts wgpu has no state for, which Nimbus's own barriers move. */
+        {VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR,
+         VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_GENERAL},
+        {VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_GENERAL},
+        {VK_IMAGE_LAYOUT_GENERAL, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, VK_IMAGE_LAYOUT_GENERAL,
+         VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL},
+        {VK_IMAGE_LAYOUT_PRESENT_SRC_KHR, VK_IMAGE_LAYOUT_PRESENT_SRC_KHR,
+         VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL, VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL},
     };
     NimbusVulkanTargets t;
     NimbusVulkanSemaphore wait, signal;
