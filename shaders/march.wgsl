@@ -1,148 +1,19 @@
 // Ray-march pass (compute): per pixel, the in-scattered radiance L, the transmittance T and
 // a representative cloud depth. Composite later does out = scene * T + L.
 
-struct MarchUniforms {
-    inv_view_proj: mat4x4f,
-    camera: vec4f,          // xyz position (m), w: depth value of the near plane
-    planet: vec4f,          // xyz up, w: planet radius (m)
-    sun: vec4f,             // xyz direction toward the sun, w: illuminance
-    sun_color: vec4f,       // rgb, w: depth value meaning "far / sky"
-    layer: vec4f,           // bottom, top altitude (m), softness, max distance (m)
-    shape: vec4f,           // coverage, density, extinction (1/m), albedo
-    scales: vec4f,          // 1/base scale, 1/detail scale, 1/weather extent, detail strength
-    wind: vec4f,            // weather-map offset (m, tangent x/z), base-noise offset (m)
-    wind_detail: vec4f,     // detail-noise offset (m, tangent x/z), unused, unused
-    phase: vec4f,           // phase parameters (see phase.wgsl)
-    ms: vec4f,              // octaves, attenuation a, contribution b, eccentricity c
-    ambient_top: vec4f,     // rgb, w: light-march distance (m)
-    ambient_bottom: vec4f,  // rgb, w: light-march steps
-    march: vec4f,           // min steps, max steps, transmittance cutoff, jitter (0/1)
-    haze: vec4f,            // rgb, w: haze start distance (m)
-    misc: vec4f,            // 1/haze fade distance, phase model, debug mode, has depth (0/1)
-    debug: vec4f,           // slab bottom, slab top, debug density, unused
-    debug_sphere: vec4f,    // sphere center xyz, radius
-    tangent_x: vec4f,       // world-space horizontal axis for the weather map, w: unused
-    tangent_z: vec4f,       // second horizontal axis, w: trace resolution divisor (1, 2, 4)
-    layer_types: vec4f,     // cloud type of layers 1-3, w: weight of the "to" weather map
-    horizon: vec4f,         // horizon gradient: strength, start distance (m), coverage, type
-    cirrus: vec4f,          // high layer: coverage, altitude (m), optical depth; w: light-step growth
-    skew: vec4f,            // xyz: how far (m) cloud tops lean downwind of their bases
-    grid: vec4f,            // trace grid width, height, block edge k (1, 2, 4), pixel angle (rad)
-    pattern: vec4f,         // this frame's offset in the block (x, y), visit index, unused
-    opts: vec4f,            // coarse-then-fine, distance-grown steps, noise LOD, light LOD (0/1)
-    viewport: vec4f,        // the rectangle of the scene targets rendered: x, y, width, height (px)
-}
-
 // Where the rendered rectangle sits in the scene depth (load_scene_depth adds its origin).
 fn scene_viewport() -> vec4f {
     return u.viewport;
 }
 
-// Per-frame parameters: a read-only storage buffer, not a uniform (lavapipe compiles a shader
-// variant per distinct uniform value; see FRAME_PARAMS_USAGE in src/gpu/compute.rs).
-@group(0) @binding(0) var<storage, read> u: MarchUniforms;
-@group(0) @binding(1) var base_tex: texture_3d<f32>;
-@group(0) @binding(2) var detail_tex: texture_3d<f32>;
-@group(0) @binding(3) var weather_from: texture_2d<f32>;
-@group(0) @binding(4) var blue_noise: texture_2d<f32>;
-@group(0) @binding(5) var noise_sampler: sampler;
 //!SCENE_DEPTH_BINDING(6)
 @group(0) @binding(7) var march_out: texture_storage_2d<rgba16float, write>;
 // r: representative cloud depth (m, 0 = no cloud), g: the scene distance the ray was clipped at,
 // b: density samples taken along the ray, a: density samples taken toward the sun.
 @group(0) @binding(8) var depth_out: texture_storage_2d<rgba32float, write>;
-@group(0) @binding(9) var weather_to: texture_2d<f32>;
 
-const DEBUG_OFF: u32 = 0u;
-const DEBUG_SLAB: u32 = 1u;
-const DEBUG_SPHERE: u32 = 2u;
-
-// Texel sizes (m) of the base and detail volumes, set once per invocation.
-var<private> base_texel: f32;
-var<private> detail_texel: f32;
 // Density samples taken toward the sun by this invocation (the per-ray counter).
 var<private> light_samples: u32;
-
-// Mip level at which one texel covers `footprint` meters (0 with the noise LOD off).
-fn lod_for(footprint: f32, texel: f32) -> f32 {
-    if (u.opts.z < 0.5 || footprint <= texel) {
-        return 0.0;
-    }
-    return log2(footprint / texel);
-}
-
-fn debug_mode() -> u32 {
-    return u32(u.misc.z);
-}
-
-fn unproject(ndc: vec2f, depth: f32) -> vec4f {
-    return u.inv_view_proj * vec4f(ndc, depth, 1.0);
-}
-
-fn horizontal_of(p: vec3f) -> vec2f {
-    return vec2f(dot(p, u.tangent_x.xyz), dot(p, u.tangent_z.xyz));
-}
-
-// The weather map at a horizontal position: the running transition's two maps, blended.
-fn weather_at(horizontal: vec2f) -> vec4f {
-    let uv = (horizontal + u.wind.xy) * u.scales.z;
-    let w = u.layer_types.w;
-    // Outside a transition only one map counts: one fetch (uniform branch, no divergence).
-    if (w >= 1.0) {
-        return textureSampleLevel(weather_to, noise_sampler, uv, 0.0);
-    }
-    let a = textureSampleLevel(weather_from, noise_sampler, uv, 0.0);
-    if (w <= 0.0) {
-        return a;
-    }
-    return mix(a, textureSampleLevel(weather_to, noise_sampler, uv, 0.0), w);
-}
-
-// Unitless density at p (σt = density × extinction); `cheap` skips the detail erosion.
-// `footprint` (m) is how wide a region the sample stands for: it picks the noise mip level.
-fn sample_density(p: vec3f, cheap: bool, footprint: f32) -> f32 {
-    let up = u.planet.xyz;
-    let radius = u.planet.w;
-    let mode = debug_mode();
-    if (mode == DEBUG_SLAB) {
-        let h = altitude(p, up, radius);
-        return select(0.0, u.debug.z, h >= u.debug.x && h <= u.debug.y);
-    }
-    if (mode == DEBUG_SPHERE) {
-        return select(0.0, u.debug.z, length(p - u.debug_sphere.xyz) <= u.debug_sphere.w);
-    }
-    let h = altitude(p, up, radius);
-    let hf = (h - u.layer.x) / (u.layer.y - u.layer.x);
-    if (hf < 0.0 || hf > 1.0) {
-        return 0.0;
-    }
-    let horizontal = horizontal_of(p);
-    let weather = weather_at(horizontal);
-    var coverage = u.shape.x * weather.rgb;
-    var types = u.layer_types.xyz;
-    // Horizon Zero Dawn's gradient: far away, layer 1 tends to big cumulus at a set coverage.
-    if (u.horizon.x > 0.0) {
-        let far = length(horizontal - horizontal_of(u.camera.xyz));
-        let g = u.horizon.x * smoothstep(u.horizon.y, u.horizon.y * 1.6 + 1.0, far);
-        coverage.x = mix(coverage.x, max(coverage.x, u.horizon.z), g);
-        types.x = mix(types.x, u.horizon.w, g);
-    }
-    // Empty space is cheap: no coverage here means no base or detail fetch at all.
-    if (max(coverage.x, max(coverage.y, coverage.z)) <= 0.0) {
-        return 0.0;
-    }
-    // Wind shear: higher parts of a cloud lean downwind.
-    let sheared = horizontal_of(p + u.skew.xyz * hf);
-    let q = vec3f(sheared.x + u.wind.z, h, sheared.y + u.wind.w);
-    let base = textureSampleLevel(base_tex, noise_sampler, q * u.scales.x, lod_for(footprint, base_texel));
-    let b = base_density(hf, base, coverage, types, u.layer.z);
-    if (b <= 0.0 || cheap) {
-        return b * u.shape.y;
-    }
-    let qd = vec3f(sheared.x + u.wind_detail.x, h, sheared.y + u.wind_detail.y);
-    let detail = textureSampleLevel(detail_tex, noise_sampler, qd * u.scales.y, lod_for(footprint, detail_texel)).rgb;
-    return eroded_density(hf, b, detail, u.shape.x, u.scales.w, u.shape.y);
-}
 
 struct Cirrus {
     radiance: vec3f,
@@ -182,18 +53,6 @@ fn cirrus_layer(cam: vec3f, dir: vec3f, max_t: f32, cos_theta: f32, sun_radiance
 
 fn haze_fade(distance: f32) -> f32 {
     return exp(-max(distance - u.haze.w, 0.0) * u.misc.x);
-}
-
-// Where a ray from p toward the sun leaves the medium (m).
-fn light_exit(p: vec3f, d: vec3f) -> f32 {
-    let mode = debug_mode();
-    if (mode == DEBUG_SPHERE) {
-        let s = ball_segment(p, d, u.debug_sphere.xyz, u.debug_sphere.w, 1e9);
-        return select(0.0, s.a.y, s.count > 0u);
-    }
-    let top = select(u.layer.y, u.debug.y, mode == DEBUG_SLAB);
-    let r = sphere_roots(p, d, u.planet.xyz, u.planet.w, top);
-    return select(0.0, max(r.t1, 0.0), r.hit);
 }
 
 // Light steps for a sample `distance` meters from the camera: with the light LOD on, one fewer
@@ -277,12 +136,7 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
 
     let up = u.planet.xyz;
     let radius = u.planet.w;
-    var seg: Segments;
-    switch (debug_mode()) {
-        case 1u: { seg = shell_segments(cam, dir, up, radius, u.debug.x, u.debug.y, max_t); }
-        case 2u: { seg = ball_segment(cam, dir, u.debug_sphere.xyz, u.debug_sphere.w, max_t); }
-        default: { seg = shell_segments(cam, dir, up, radius, u.layer.x, u.layer.y, max_t); }
-    }
+    let seg = medium_segments(cam, dir, max_t);
     let len_a = select(0.0, seg.a.y - seg.a.x, seg.count > 0u);
     let len_b = select(0.0, seg.b.y - seg.b.x, seg.count > 1u);
     let total = len_a + len_b;

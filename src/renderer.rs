@@ -732,6 +732,38 @@ impl Renderer {
         forget_binds(&mut self.passes, &mut self.composite, &buffers);
     }
 
+    /// The march's parameters for `frame` (validated), as `prepare` computes them.
+    pub(crate) fn march_uniforms(&self, frame: &FrameInputs) -> Result<MarchUniforms> {
+        let (camera, sun_dir) = frame.validate()?;
+        let sample = self.timeline.sample(frame.time);
+        Ok(MarchUniforms::new(
+            &self.settings,
+            &sample,
+            frame,
+            &camera,
+            sun_dir,
+            false,
+        ))
+    }
+
+    /// The device, queue, noise textures and current weather-map views, for passes that see
+    /// the same medium (the path tracer).
+    pub(crate) fn medium(
+        &self,
+    ) -> (
+        &wgpu::Device,
+        &wgpu::Queue,
+        &NoiseTextures,
+        (&wgpu::TextureView, &wgpu::TextureView),
+    ) {
+        (
+            &self.device,
+            &self.queue,
+            &self.noise,
+            self.weather_maps.views(),
+        )
+    }
+
     pub(crate) fn noise_volume(&self, which: NoiseVolume) -> &wgpu::Texture {
         self.noise.volume(which)
     }

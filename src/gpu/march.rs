@@ -12,7 +12,7 @@ use crate::frame::{CameraDerived, FrameInputs};
 use crate::settings::{DebugDensity, Settings};
 use crate::weather::WeatherSample;
 
-/// Layout must match `MarchUniforms` in shaders/march.wgsl field for field.
+/// Layout must match `MarchUniforms` in shaders/medium.wgsl field for field.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub(crate) struct MarchUniforms {
@@ -358,7 +358,7 @@ mod tests {
 
     #[test]
     fn uniforms_match_the_wgsl_struct_size() {
-        // 1 mat4 + 28 vec4 in shaders/march.wgsl.
+        // 1 mat4 + 28 vec4 in shaders/medium.wgsl.
         assert_eq!(std::mem::size_of::<MarchUniforms>(), 64 + 28 * 16);
         let src = pass_source("march", DepthKind::Depth);
         let start = src.find("struct MarchUniforms").unwrap();

@@ -26,7 +26,9 @@ pub(crate) const NOISE_BAKE: (&str, &str) = shader!("noise_bake.wgsl");
 pub(crate) const WEATHER_BAKE: (&str, &str) = shader!("weather_bake.wgsl");
 pub(crate) const WEATHER_BLEND: (&str, &str) = shader!("weather_blend.wgsl");
 pub(crate) const MIP_DOWNSAMPLE: (&str, &str) = shader!("mip_downsample.wgsl");
+pub(crate) const MEDIUM: (&str, &str) = shader!("medium.wgsl");
 pub(crate) const MARCH: (&str, &str) = shader!("march.wgsl");
+pub(crate) const PATH_TRACE: (&str, &str) = shader!("path_trace.wgsl");
 pub(crate) const TEMPORAL: (&str, &str) = shader!("temporal.wgsl");
 pub(crate) const COMPOSITE: (&str, &str) = shader!("composite.wgsl");
 pub(crate) const COMPOSITE_SEPARATE: (&str, &str) = shader!("composite_separate.wgsl");
@@ -37,7 +39,16 @@ pub(crate) const PASSES: &[(&str, &[(&str, &str)])] = &[
     ("weather_bake", &[COMMON, NOISE, WEATHER_BAKE]),
     ("weather_blend", &[WEATHER_BLEND]),
     ("mip_downsample", &[MIP_DOWNSAMPLE]),
-    ("march", &[COMMON, DEPTH, ATMOSPHERE, PHASE, DENSITY, MARCH]),
+    (
+        "march",
+        &[COMMON, DEPTH, ATMOSPHERE, PHASE, DENSITY, MEDIUM, MARCH],
+    ),
+    (
+        "path_trace",
+        &[
+            COMMON, DEPTH, ATMOSPHERE, PHASE, DENSITY, MEDIUM, PATH_TRACE,
+        ],
+    ),
     ("temporal", &[DEPTH, TEMPORAL]),
     ("composite_in_place", &[DEPTH, COMPOSITE]),
     (

@@ -1,0 +1,202 @@
+// Path-traced reference (compute): unbiased and progressive, the ground truth the march is
+// judged against. Per pixel and sample, a path from the camera through the pixel centre:
+// - free flights by delta tracking (Woodcock; Novák et al. 2018, "Monte Carlo methods for
+//   volumetric light transport simulation") through exactly the density the march sees
+//   (medium.wgsl, at mip 0), with the density bound as majorant;
+// - at each real collision the path scatters with probability = albedo (the weight carries
+//   it), takes next-event estimation toward the sun with ratio-tracked transmittance (Novák
+//   et al. 2014, "Residual ratio tracking"), and samples its new direction from the phase
+//   function exactly (Henyey-Greenstein inverted in closed form; the Draine lobe by rejection
+//   from its HG factor, accepted with (1 + α cos²θ) / (1 + α));
+// - every order, ended only by escape or Russian roulette on the weight;
+// - a path that leaves the medium after scattering sees the sky the march's ambient terms
+//   stand for: `ambient_top` above the horizontal, `ambient_bottom` below it and on the ground.
+// The camera ray's own transmittance is ratio-tracked too. Sums go to `accum` (rgb: radiance,
+// a: transmittance); the host divides by the sample count.
+
+struct PathParams {
+    size: vec4u,      // image width, height, seed of this dispatch, samples per pixel in it
+    mode: vec4u,      // x: 1 = single scattering only, y: order at which roulette starts
+}
+
+@group(0) @binding(6) var<storage, read_write> accum: array<vec4f>;
+@group(0) @binding(7) var<storage, read> pt: PathParams;
+
+var<private> rng_state: u32;
+
+// PCG (O'Neill 2014), the RXS-M-XS output: one uniform number in [0, 1).
+fn rand() -> f32 {
+    rng_state = rng_state * 747796405u + 2891336453u;
+    var w = ((rng_state >> ((rng_state >> 28u) + 4u)) ^ rng_state) * 277803737u;
+    w = (w >> 22u) ^ w;
+    return f32(w >> 8u) * (1.0 / 16777216.0);
+}
+
+fn sigma_t(p: vec3f) -> f32 {
+    return sample_density(p, false, 0.0) * u.shape.z;
+}
+
+// The extinction bound: density never exceeds the weather's density scale (noise model) or
+// the debug medium's density.
+fn majorant() -> f32 {
+    return u.shape.z * select(u.shape.y, u.debug.z, debug_mode() != DEBUG_OFF);
+}
+
+// The first real collision along o + t d, t in the medium's intervals below max_t; -1: none.
+fn collide(o: vec3f, d: vec3f, max_t: f32, m: f32) -> f32 {
+    let seg = medium_segments(o, d, max_t);
+    for (var k = 0u; k < seg.count; k++) {
+        let s = select(seg.b, seg.a, k == 0u);
+        var t = s.x;
+        for (var guard = 0u; guard < 1000000u; guard++) {
+            t -= log(1.0 - rand()) / m;
+            if (t >= s.y) {
+                break;
+            }
+            if (rand() * m < sigma_t(o + d * t)) {
+                return t;
+            }
+        }
+    }
+    return -1.0;
+}
+
+// Ratio tracking: an unbiased estimate of the transmittance along o + t d up to max_t, with
+// twice the majorant so each tentative collision halves the estimate at most (smoother than
+// the all-or-nothing track-length estimate in a homogeneous medium).
+fn transmittance(o: vec3f, d: vec3f, max_t: f32, m: f32) -> f32 {
+    let seg = medium_segments(o, d, max_t);
+    let mr = 2.0 * m;
+    var tr = 1.0;
+    for (var k = 0u; k < seg.count; k++) {
+        let s = select(seg.b, seg.a, k == 0u);
+        var t = s.x;
+        for (var guard = 0u; guard < 1000000u; guard++) {
+            t -= log(1.0 - rand()) / mr;
+            if (t >= s.y || tr <= 0.0) {
+                break;
+            }
+            tr *= 1.0 - sigma_t(o + d * t) / mr;
+        }
+    }
+    return tr;
+}
+
+fn blocked_by_ground(o: vec3f, d: vec3f) -> bool {
+    let g = sphere_roots(o, d, u.planet.xyz, u.planet.w, 0.0);
+    return altitude(o, u.planet.xyz, u.planet.w) >= 0.0 && g.hit && g.t0 > 0.0;
+}
+
+// cos θ from Henyey-Greenstein with asymmetry g, by inversion of its CDF.
+fn sample_hg(g: f32) -> f32 {
+    let xi = rand();
+    if (abs(g) < 1e-3) {
+        return 1.0 - 2.0 * xi;
+    }
+    let s = (1.0 - g * g) / (1.0 - g + 2.0 * g * xi);
+    return clamp((1.0 + g * g - s * s) / (2.0 * g), -1.0, 1.0);
+}
+
+// cos θ from Draine's phase function: HG(g) proposals accepted with (1 + α cos²θ) / (1 + α).
+fn sample_draine(g: f32, alpha: f32) -> f32 {
+    var c = sample_hg(g);
+    for (var guard = 0u; guard < 4096u; guard++) {
+        if (rand() * (1.0 + alpha) <= 1.0 + alpha * c * c) {
+            return c;
+        }
+        c = sample_hg(g);
+    }
+    return c;
+}
+
+// cos θ from the phase function of phase.wgsl (the same models and parameters).
+fn sample_phase_cos(model: u32, params: vec4f) -> f32 {
+    if (model == 0u) {
+        if (rand() < params.w) {
+            return sample_draine(params.y, params.z);
+        }
+        return sample_hg(params.x);
+    }
+    if (rand() < params.w) {
+        return sample_hg(params.x);
+    }
+    return sample_hg(params.y);
+}
+
+// A direction at angle acos(cos_theta) from d, uniform in azimuth.
+fn turn(d: vec3f, cos_theta: f32) -> vec3f {
+    let a = select(vec3f(1.0, 0.0, 0.0), vec3f(0.0, 1.0, 0.0), abs(d.x) > 0.9);
+    let x = normalize(cross(a, d));
+    let y = cross(d, x);
+    let phi = 2.0 * PI * rand();
+    let sin_theta = sqrt(max(1.0 - cos_theta * cos_theta, 0.0));
+    return normalize(d * cos_theta + (x * cos(phi) + y * sin(phi)) * sin_theta);
+}
+
+fn sky(o: vec3f, d: vec3f) -> vec3f {
+    let up = normalize(o + u.planet.xyz * u.planet.w);
+    let above = dot(d, up) > 0.0 && !blocked_by_ground(o, d);
+    return select(u.ambient_bottom.rgb, u.ambient_top.rgb, above);
+}
+
+@compute @workgroup_size(8, 8, 1)
+fn trace(@builtin(global_invocation_id) id: vec3u) {
+    let size = pt.size.xy;
+    if (any(id.xy >= size)) {
+        return;
+    }
+    let cam = u.camera.xyz;
+    let near_p = unproject(pixel_ndc(id.xy, size), u.camera.w);
+    let view_dir = normalize(near_p.xyz / near_p.w - cam);
+    let m = majorant();
+    let model = u32(u.misc.y);
+    let sun = u.sun.xyz;
+    let sun_radiance = u.sun.w * u.sun_color.rgb;
+    let albedo = u.shape.w;
+    var sum = vec4f(0.0);
+    for (var s = 0u; s < pt.size.w; s++) {
+        rng_state = pcg3d(vec3u(id.xy, pt.size.z * 4096u + s)).x;
+        var radiance = vec3f(0.0);
+        if (m > 0.0) {
+            sum.a += transmittance(cam, view_dir, u.layer.w, m);
+            var o = cam;
+            var d = view_dir;
+            var max_t = u.layer.w;
+            var weight = 1.0;
+            var order = 0u;
+            for (var guard = 0u; guard < 100000u; guard++) {
+                let t = collide(o, d, max_t, m);
+                if (t < 0.0) {
+                    if (order > 0u) {
+                        radiance += weight * sky(o, d);
+                    }
+                    break;
+                }
+                o += d * t;
+                order += 1u;
+                weight *= albedo;
+                if (!blocked_by_ground(o, sun)) {
+                    let p = phase_eval(model, u.phase, dot(sun, d), 1.0);
+                    radiance += weight * sun_radiance * p * transmittance(o, sun, 1e9, m);
+                }
+                if (pt.mode.x == 1u) {
+                    break;
+                }
+                if (order >= pt.mode.y) {
+                    let q = min(weight, 1.0);
+                    if (rand() >= q) {
+                        break;
+                    }
+                    weight /= q;
+                }
+                d = turn(d, sample_phase_cos(model, u.phase));
+                max_t = 1e9;
+            }
+        } else {
+            sum.a += 1.0;
+        }
+        sum += vec4f(radiance, 0.0);
+    }
+    let i = id.y * size.x + id.x;
+    accum[i] += sum;
+}

@@ -1,0 +1,275 @@
+//! [`PathTracer`]: the path-traced reference (shaders/path_trace.wgsl). Unbiased and
+//! progressive: every call adds samples per pixel to a float accumulation, through exactly
+//! the medium a [`Renderer`] marches (its noise volumes, weather maps and settings, or its
+//! debug media). It is what the march's lighting model is judged against, and a way for users
+//! to check their own settings or render stills.
+//!
+//! What it models: all scattering orders (Russian roulette on the path weight, no order cap),
+//! the sun by next-event estimation with ratio-tracked transmittance (the planet's shadow
+//! total), the phase function sampled exactly, and the ambient terms as the sky a scattered
+//! path sees when it leaves the medium (`ambient_top` above the horizontal, `ambient_bottom`
+//! below it and on the ground). What it leaves out: the host's scene depth (the clouds are
+//! traced over an empty scene), the haze and the cirrus sheet (set the haze fade distance to
+//! infinity and cirrus coverage to 0 when comparing). Rays go through pixel centres, as the
+//! march's do.
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::device::gpu_scope;
+use crate::error::{Error, Result};
+use crate::frame::FrameInputs;
+use crate::gpu::bind_cache::BindCache;
+use crate::gpu::compute::{frame_pipeline, params_entry, texture_entry, FRAME_PARAMS_USAGE};
+use crate::gpu::march::MarchUniforms;
+use crate::gpu::shaders::DepthKind;
+use crate::Renderer;
+
+/// Mirrors `PathParams` in shaders/path_trace.wgsl.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct PathParams {
+    size: [u32; 4],
+    mode: [u32; 4],
+}
+
+/// What the path tracer counts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Orders {
+    /// Every scattering order (the reference).
+    All,
+    /// First-order scattering only (to check against single-scattering closed forms).
+    SingleOnly,
+}
+
+/// The largest image side the path tracer takes.
+pub const MAX_REFERENCE_SIZE: u32 = 4096;
+
+/// Samples per pixel one dispatch takes at most (the rest is split over several dispatches,
+/// so no single GPU submission runs long enough to trip a driver watchdog).
+const SAMPLES_PER_DISPATCH: u32 = 4;
+
+/// The path-traced reference of one view: see the module docs.
+pub struct PathTracer {
+    layout: wgpu::BindGroupLayout,
+    pipeline: wgpu::ComputePipeline,
+    binds: BindCache,
+    uniforms: wgpu::Buffer,
+    params: wgpu::Buffer,
+    accum: wgpu::Buffer,
+    /// Where `read` copies the accumulation to map it.
+    staging: wgpu::Buffer,
+    size: (u32, u32),
+    orders: Orders,
+    samples: u32,
+    dispatches: u32,
+}
+
+impl PathTracer {
+    /// A path tracer for `width` × `height` images on `renderer`'s device, counting `orders`.
+    pub fn new(renderer: &Renderer, width: u32, height: u32, orders: Orders) -> Result<Self> {
+        if width == 0 || height == 0 || width > MAX_REFERENCE_SIZE || height > MAX_REFERENCE_SIZE {
+            return Err(Error::InvalidTarget {
+                target: "reference",
+                reason: format!("{width}x{height}: each side must be 1..={MAX_REFERENCE_SIZE}"),
+            });
+        }
+        let (device, _, _, _) = renderer.medium();
+        gpu_scope(device, || {
+            use wgpu::TextureSampleType as S;
+            use wgpu::TextureViewDimension as D;
+            let filterable = S::Float { filterable: true };
+            let storage = |binding, read_only, size: u64| wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Storage { read_only },
+                    has_dynamic_offset: false,
+                    min_binding_size: wgpu::BufferSize::new(size),
+                },
+                count: None,
+            };
+            let (layout, pipeline) = frame_pipeline(
+                device,
+                "nimbus path trace",
+                "path_trace",
+                DepthKind::Depth,
+                "trace",
+                &[
+                    params_entry::<MarchUniforms>(0),
+                    texture_entry(1, filterable, D::D3),
+                    texture_entry(2, filterable, D::D3),
+                    texture_entry(3, filterable, D::D2),
+                    texture_entry(4, filterable, D::D2),
+                    wgpu::BindGroupLayoutEntry {
+                        binding: 5,
+                        visibility: wgpu::ShaderStages::COMPUTE,
+                        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                        count: None,
+                    },
+                    storage(6, false, 16),
+                    storage(7, true, std::mem::size_of::<PathParams>() as u64),
+                    texture_entry(9, filterable, D::D2),
+                ],
+            );
+            let buffer = |label, size, usage| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size,
+                    usage,
+                    mapped_at_creation: false,
+                })
+            };
+            let pixels = width as u64 * height as u64;
+            Self {
+                layout,
+                pipeline,
+                binds: BindCache::default(),
+                uniforms: buffer(
+                    "nimbus path trace uniforms",
+                    std::mem::size_of::<MarchUniforms>() as u64,
+                    FRAME_PARAMS_USAGE,
+                ),
+                params: buffer(
+                    "nimbus path trace params",
+                    std::mem::size_of::<PathParams>() as u64,
+                    FRAME_PARAMS_USAGE,
+                ),
+                accum: buffer(
+                    "nimbus path trace accumulation",
+                    pixels * 16,
+                    wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_SRC
+                        | wgpu::BufferUsages::COPY_DST,
+                ),
+                staging: buffer(
+                    "nimbus path trace readback",
+                    pixels * 16,
+                    wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                ),
+                size: (width, height),
+                orders,
+                samples: 0,
+                dispatches: 0,
+            }
+        })
+    }
+
+    /// Samples per pixel accumulated since creation or the last [`PathTracer::reset`].
+    pub fn samples(&self) -> u32 {
+        self.samples
+    }
+
+    /// Drops the accumulation (call it when the view, the settings or the time change).
+    pub fn reset(&mut self) {
+        self.samples = 0;
+    }
+
+    /// Adds `samples` paths per pixel of `frame` (its camera, sun and time) through
+    /// `renderer`'s medium, submitting the work on the renderer's queue. The image must be
+    /// reset by the caller when the frame changes: the accumulation assumes one still view.
+    pub fn accumulate(
+        &mut self,
+        renderer: &Renderer,
+        frame: &FrameInputs,
+        samples: u32,
+    ) -> Result<()> {
+        let uniforms = renderer.march_uniforms(frame)?;
+        let (device, queue, noise, weather) = renderer.medium();
+        gpu_scope(device, || {
+            if self.samples == 0 {
+                let mut enc = device.create_command_encoder(&Default::default());
+                enc.clear_buffer(&self.accum, 0, None);
+                queue.submit([enc.finish()]);
+            }
+            queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
+            let tex = |b, v| wgpu::BindGroupEntry {
+                binding: b,
+                resource: wgpu::BindingResource::TextureView(v),
+            };
+            let views = [
+                &noise.base_view,
+                &noise.detail_view,
+                weather.0,
+                &noise.blue_noise_view,
+                weather.1,
+            ];
+            let layout = &self.layout;
+            let (u, p, a) = (&self.uniforms, &self.params, &self.accum);
+            let bind = self.binds.get(u, &views, || {
+                device.create_bind_group(&wgpu::BindGroupDescriptor {
+                    label: Some("nimbus path trace"),
+                    layout,
+                    entries: &[
+                        wgpu::BindGroupEntry {
+                            binding: 0,
+                            resource: u.as_entire_binding(),
+                        },
+                        tex(1, &noise.base_view),
+                        tex(2, &noise.detail_view),
+                        tex(3, weather.0),
+                        tex(4, &noise.blue_noise_view),
+                        wgpu::BindGroupEntry {
+                            binding: 5,
+                            resource: wgpu::BindingResource::Sampler(&noise.sampler),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 6,
+                            resource: a.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 7,
+                            resource: p.as_entire_binding(),
+                        },
+                        tex(9, weather.1),
+                    ],
+                })
+            });
+            let mut left = samples;
+            while left > 0 {
+                let n = left.min(SAMPLES_PER_DISPATCH);
+                let params = PathParams {
+                    size: [self.size.0, self.size.1, self.dispatches, n],
+                    mode: [(self.orders == Orders::SingleOnly) as u32, 3, 0, 0],
+                };
+                // One submit per dispatch: the params buffer is written between them.
+                queue.write_buffer(&self.params, 0, bytemuck::bytes_of(&params));
+                let mut enc = device.create_command_encoder(&Default::default());
+                {
+                    let mut pass = enc.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                        label: Some("nimbus path trace"),
+                        timestamp_writes: None,
+                    });
+                    pass.set_pipeline(&self.pipeline);
+                    pass.set_bind_group(0, &bind, &[]);
+                    pass.dispatch_workgroups(self.size.0.div_ceil(8), self.size.1.div_ceil(8), 1);
+                }
+                queue.submit([enc.finish()]);
+                self.dispatches = self.dispatches.wrapping_add(1);
+                left -= n;
+            }
+        })?;
+        self.samples += samples;
+        Ok(())
+    }
+
+    /// The image so far, row by row: (radiance r, g, b, transmittance of the camera ray) per
+    /// pixel, the means over the accumulated samples. Waits for the GPU.
+    pub fn read(&self, renderer: &Renderer) -> Result<Vec<[f32; 4]>> {
+        if self.samples == 0 {
+            return Err(Error::InvalidTarget {
+                target: "reference",
+                reason: "no samples accumulated yet".into(),
+            });
+        }
+        let (device, queue, _, _) = renderer.medium();
+        let mut enc = device.create_command_encoder(&Default::default());
+        enc.copy_buffer_to_buffer(&self.accum, 0, &self.staging, 0, None);
+        queue.submit([enc.finish()]);
+        let bytes = crate::gpu::readback::map_read(device, &self.staging)?;
+        let n = self.samples as f32;
+        Ok(bytemuck::cast_slice::<u8, [f32; 4]>(&bytes)
+            .iter()
+            .map(|p| p.map(|c| c / n))
+            .collect())
+    }
+}

@@ -1,0 +1,243 @@
+//! The path-traced reference against closed forms, on homogeneous debug slabs:
+//! - first-order scattering alone equals the slab's single-scattering closed form;
+//! - a thin slab's all-order radiance is its single scattering plus a little;
+//! - an albedo-1 slab over black ground conserves energy: the reflected flux above it, the
+//!   diffuse and the direct transmitted flux below it (each hemisphere integrated from six
+//!   90° camera faces) add up to the incident flux;
+//! - bad sizes and reads before any sample are errors.
+
+mod common;
+use common::{setup, small_noise};
+
+use glam::{Mat4, Vec3, Vec4};
+use nimbus::lighting::phase::PhaseModel;
+use nimbus::lighting::scattering::slab_single_scattering;
+use nimbus::{
+    Camera, DebugDensity, DepthConvention, FrameInputs, Orders, PathTracer, Renderer, Settings, Sun,
+};
+
+const BOTTOM: f32 = 1_000.0;
+const TOP: f32 = 1_500.0;
+
+fn slab_settings(extinction: f32, albedo: f32) -> Settings {
+    let mut s = small_noise(1);
+    s.debug_density = DebugDensity::Slab {
+        bottom_altitude: BOTTOM,
+        top_altitude: TOP,
+        density: 1.0,
+    };
+    s.weather.clouds.extinction = extinction;
+    s.weather.clouds.albedo = albedo;
+    s.weather.ambient_top = Vec3::ZERO;
+    s.weather.ambient_bottom = Vec3::ZERO;
+    s.haze.fade_distance = f32::INFINITY;
+    s
+}
+
+fn sun_dir() -> Vec3 {
+    Vec3::new(0.3, 0.85, 0.2).normalize()
+}
+
+fn frame(eye: Vec3, forward: Vec3, up: Vec3, fov_deg: f32, aspect: f32) -> FrameInputs {
+    FrameInputs {
+        camera: Camera {
+            view: Mat4::look_at_rh(eye, eye + forward, up),
+            projection: Mat4::perspective_rh(fov_deg.to_radians(), aspect, 1.0, 1e6),
+            depth: DepthConvention::default(),
+        },
+        sun: Sun {
+            direction: sun_dir(),
+            color: Vec3::ONE,
+            illuminance: 10.0,
+        },
+        time: 0.0,
+    }
+}
+
+/// The direction through the centre of pixel (x, y) of a w × h image of `f`.
+fn pixel_dir(f: &FrameInputs, x: u32, y: u32, w: u32, h: u32) -> Vec3 {
+    let inv = (f.camera.projection * f.camera.view).inverse();
+    let eye = f.camera.view.inverse().w_axis.truncate();
+    let ndc_x = (x as f32 + 0.5) / w as f32 * 2.0 - 1.0;
+    let ndc_y = 1.0 - (y as f32 + 0.5) / h as f32 * 2.0;
+    let p = inv * Vec4::new(ndc_x, ndc_y, 0.0, 1.0);
+    (p.truncate() / p.w - eye).normalize()
+}
+
+fn trace(
+    r: &Renderer,
+    f: &FrameInputs,
+    size: (u32, u32),
+    orders: Orders,
+    spp: u32,
+) -> Vec<[f32; 4]> {
+    let mut pt = PathTracer::new(r, size.0, size.1, orders).unwrap();
+    pt.accumulate(r, f, spp).unwrap();
+    assert_eq!(pt.samples(), spp);
+    pt.read(r).unwrap()
+}
+
+fn renderer(settings: Settings) -> Renderer {
+    setup();
+    let (device, queue, _) = nimbus::headless::create_device().unwrap();
+    Renderer::new(&device, &queue, settings).unwrap()
+}
+
+/// Camera 2 m above the ground, looking up into the slab (as tests/gpu.rs does for the march).
+fn below_view(w: u32, h: u32) -> FrameInputs {
+    frame(
+        Vec3::new(0.0, 2.0, 0.0),
+        Vec3::Y,
+        Vec3::Z,
+        25.0,
+        w as f32 / h as f32,
+    )
+}
+
+#[test]
+fn single_scattering_matches_the_slab_closed_form() {
+    let (w, h, extinction) = (32, 18, 0.004f32);
+    let settings = slab_settings(extinction, 1.0);
+    let phase = settings.lighting.phase;
+    let r = renderer(settings);
+    let f = below_view(w, h);
+    let spp = 1024;
+    let got = trace(&r, &f, (w, h), Orders::SingleOnly, spp);
+    // Per pixel the estimate is noisy (ratio-tracked transmittance): compare blocks of 4 x 3
+    // pixels, and the whole image.
+    let (bw, bh) = (4, 3);
+    let mut blocks = vec![(0.0f64, 0.0f64, 0.0f64, 0.0f64); ((w / bw) * (h / bh)) as usize];
+    for y in 0..h {
+        for x in 0..w {
+            let dir = pixel_dir(&f, x, y, w, h);
+            let (l, t) = slab_single_scattering(
+                extinction,
+                1.0,
+                TOP - BOTTOM,
+                dir.y,
+                sun_dir().y,
+                phase.eval(sun_dir().dot(dir), 1.0),
+                10.0,
+            );
+            let p = got[(y * w + x) as usize];
+            let b = &mut blocks[((y / bh) * (w / bw) + x / bw) as usize];
+            b.0 += p[0] as f64;
+            b.1 += l as f64;
+            b.2 += p[3] as f64;
+            b.3 += t as f64;
+        }
+    }
+    let ratio = blocks.iter().map(|b| b.0).sum::<f64>() / blocks.iter().map(|b| b.1).sum::<f64>();
+    let worst = blocks
+        .iter()
+        .map(|b| (b.0 / b.1 - 1.0).abs())
+        .fold(0.0, f64::max);
+    let worst_t = blocks
+        .iter()
+        .map(|b| (b.2 - b.3).abs() / (bw * bh) as f64)
+        .fold(0.0, f64::max);
+    println!(
+        "single scattering, path traced / closed form: {ratio:.4} over the image; worst 4x3 block {:.2}%, worst block T {worst_t:.4}",
+        worst * 100.0
+    );
+    assert!((ratio - 1.0).abs() < 0.01, "image mean off by {ratio}");
+    assert!(worst < 0.05, "a block is off by {:.1}%", worst * 100.0);
+    assert!(worst_t < 0.01, "camera-ray transmittance off by {worst_t}");
+}
+
+#[test]
+fn a_thin_slab_is_mostly_single_scattering() {
+    let (w, h) = (16, 9);
+    // tau = 0.05 through the slab's thickness.
+    let r = renderer(slab_settings(0.0001, 1.0));
+    let f = below_view(w, h);
+    let mean = |img: &[[f32; 4]]| img.iter().map(|p| p[0] as f64).sum::<f64>() / img.len() as f64;
+    let single = mean(&trace(&r, &f, (w, h), Orders::SingleOnly, 512));
+    let all = mean(&trace(&r, &f, (w, h), Orders::All, 512));
+    let extra = all / single - 1.0;
+    println!(
+        "thin slab (tau 0.05): all orders / single = {:.4}",
+        all / single
+    );
+    assert!(
+        extra > -0.01 && extra < 0.08,
+        "all orders add {:.1}%",
+        extra * 100.0
+    );
+}
+
+/// The flux through a horizontal plane at `eye` from radiance arriving from below
+/// (`from_below`) or from above, integrated over six 90° faces of `n` × `n` pixels.
+fn hemisphere_flux(r: &Renderer, eye: Vec3, n: u32, spp: u32, from_below: bool) -> f64 {
+    let faces = [
+        (Vec3::X, Vec3::Y),
+        (Vec3::NEG_X, Vec3::Y),
+        (Vec3::Z, Vec3::Y),
+        (Vec3::NEG_Z, Vec3::Y),
+        (Vec3::Y, Vec3::Z),
+        (Vec3::NEG_Y, Vec3::Z),
+    ];
+    let mut flux = 0.0f64;
+    for (forward, up) in faces {
+        let f = frame(eye, forward, up, 90.0, 1.0);
+        let img = trace(r, &f, (n, n), Orders::All, spp);
+        for y in 0..n {
+            for x in 0..n {
+                let d = pixel_dir(&f, x, y, n, n);
+                // Looking down (d.y < 0) sees light travelling up, and the reverse.
+                if (d.y < 0.0) != from_below {
+                    continue;
+                }
+                let (u, v) = (
+                    (x as f64 + 0.5) / n as f64 * 2.0 - 1.0,
+                    (y as f64 + 0.5) / n as f64 * 2.0 - 1.0,
+                );
+                let solid_angle = (2.0 / n as f64).powi(2) / (1.0 + u * u + v * v).powf(1.5);
+                flux += img[(y * n + x) as usize][0] as f64 * d.y.abs() as f64 * solid_angle;
+            }
+        }
+    }
+    flux
+}
+
+#[test]
+fn an_albedo_one_slab_conserves_energy() {
+    // tau = 2 through the slab's thickness, a moderately forward phase (so the faces' pixel
+    // grid resolves the transmitted aureole).
+    let extinction = 0.004f32;
+    let mut settings = slab_settings(extinction, 1.0);
+    settings.lighting.phase = PhaseModel::DualLobeHg {
+        g_forward: 0.6,
+        g_backward: -0.2,
+        forward_weight: 0.8,
+    };
+    let r = renderer(settings);
+    let (n, spp) = (24, 48);
+    let reflected = hemisphere_flux(&r, Vec3::new(0.0, TOP + 50.0, 0.0), n, spp, true);
+    let diffuse = hemisphere_flux(&r, Vec3::new(0.0, BOTTOM - 50.0, 0.0), n, spp, false);
+    let mu0 = sun_dir().y as f64;
+    let incident = 10.0 * mu0;
+    let direct = incident * (-(extinction as f64) * (TOP - BOTTOM) as f64 / mu0).exp();
+    let total = (reflected + diffuse + direct) / incident;
+    println!(
+        "albedo-1 slab (tau 2): reflected {:.4}, diffuse transmitted {:.4}, direct {:.4} of the incident flux; sum {total:.4}",
+        reflected / incident,
+        diffuse / incident,
+        direct / incident
+    );
+    assert!((total - 1.0).abs() < 0.03, "energy: {total}");
+    assert!(reflected > 0.05 * incident && diffuse > 0.2 * incident);
+}
+
+#[test]
+fn bad_sizes_and_early_reads_are_errors() {
+    let r = renderer(slab_settings(0.004, 1.0));
+    for (w, h) in [(0, 10), (10, 0), (5000, 10)] {
+        let e = PathTracer::new(&r, w, h, Orders::All)
+            .err()
+            .expect("refused");
+        assert!(e.to_string().contains("reference"), "{e}");
+    }
+    let pt = PathTracer::new(&r, 4, 4, Orders::All).unwrap();
+    assert!(pt.read(&r).is_err());
+}
