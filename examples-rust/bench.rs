@@ -65,7 +65,8 @@ fn settings_for(weather: &Weather, variant: Variant) -> Settings {
             s.march.min_steps = 512;
             s.march.max_steps = 512;
             s.march.jitter = false;
-            s.march.transmittance_cutoff = 0.001;
+            // As Ultra: no early exit (the remaining light of a thick cloud is not negligible).
+            s.march.transmittance_cutoff = 0.0;
             // 32 gently growing light steps: 5 m first, 400 m last.
             s.lighting.light_steps = 32;
             s.lighting.light_step_growth = 1.15;

@@ -77,6 +77,14 @@ fn transmittance(o: vec3f, d: vec3f, max_t: f32, m: f32) -> f32 {
                 break;
             }
             tr *= 1.0 - sigma_t(o + d * t) / mr;
+            // Russian roulette on a small estimate (unbiased: survivors count double), so
+            // shadow rays from deep inside a thick cloud stop early.
+            if (tr < 0.05) {
+                if (rand() < 0.5) {
+                    return 0.0;
+                }
+                tr *= 2.0;
+            }
         }
     }
     return tr;
@@ -155,7 +163,7 @@ fn trace(@builtin(global_invocation_id) id: vec3u) {
     let albedo = u.shape.w;
     var sum = vec4f(0.0);
     for (var s = 0u; s < pt.size.w; s++) {
-        rng_state = pcg3d(vec3u(id.xy, pt.size.z * 4096u + s)).x;
+        rng_state = pcg3d(vec3u(id.x, id.y | (s << 16u), pt.size.z)).x;
         var radiance = vec3f(0.0);
         if (m > 0.0) {
             sum.a += transmittance(cam, view_dir, u.layer.w, m);

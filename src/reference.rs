@@ -154,6 +154,13 @@ impl PathTracer {
         })
     }
 
+    /// Starts the random sequence at `seed` (tracers with different seeds draw independent
+    /// samples; two halves of an estimate tell its Monte-Carlo error).
+    pub fn with_seed(mut self, seed: u16) -> Self {
+        self.dispatches = (seed as u32) << 16;
+        self
+    }
+
     /// Samples per pixel accumulated since creation or the last [`PathTracer::reset`].
     pub fn samples(&self) -> u32 {
         self.samples

@@ -247,7 +247,7 @@ pub enum Quality {
     High,
     /// The unoptimised march: every pixel every frame at full resolution, 64-128 steps
     /// uniform along the path, 12 light steps (growth 1.4), no temporal reuse, no coarse
-    /// stepping, no LOD.
+    /// stepping, no LOD, no early exit at low transmittance (the others stop at 0.01).
     Ultra,
 }
 
@@ -283,6 +283,10 @@ impl Quality {
         m.coarse_then_fine = optimised;
         m.distance_steps = optimised;
         m.noise_lod = optimised;
+        // The unoptimised march goes on to the end of the medium: stopping at T = 0.01 with no
+        // estimate of what lies beyond dropped two thirds of a thick slab's single scattering
+        // (its deep, sunward part is the brightest). The other levels keep the early exit.
+        m.transmittance_cutoff = if optimised { 0.01 } else { 0.0 };
         settings.lighting.light_steps = light;
         settings.lighting.light_step_growth = growth;
         settings.lighting.light_lod = optimised;
@@ -457,11 +461,27 @@ fn light_partition(steps: u32, growth: f32, distance: f32) -> Result<()> {
     ))
 }
 
+/// The largest planet radius the shaders represent: their ray-sphere roots square terms of
+/// the order of the radius in f32 (which overflows near 1.8e19 m, rendering nothing), and
+/// the cloud shell's altitudes must stay resolved. Tested at this value (tests/gpu.rs).
+pub const MAX_PLANET_RADIUS: f32 = 1.0e12;
+
 impl Settings {
     /// Checks every field and the combinations that interact (the light-step partition);
     /// the error names the first offending field.
     pub fn validate(&self) -> Result<()> {
         positive("planet.radius", self.planet.radius)?;
+        if self.planet.radius > MAX_PLANET_RADIUS {
+            return Err(invalid(
+                "planet.radius",
+                format!(
+                    "{} m is beyond what the shaders' f32 shell geometry represents (at most \
+                     {MAX_PLANET_RADIUS:e} m; a larger world is flat to within a millimetre \
+                     over 100 km)",
+                    crate::validate::num(self.planet.radius)
+                ),
+            ));
+        }
         if !self.planet.up.is_finite() || self.planet.up.length() < 1e-6 {
             return Err(invalid(
                 "planet.up",
@@ -600,6 +620,12 @@ mod tests {
         assert_eq!(refused(&s), "planet.radius");
         s.planet.radius = f32::NAN;
         assert_eq!(refused(&s), "planet.radius");
+        s.planet.radius = 2.0e19;
+        assert_eq!(refused(&s), "planet.radius");
+        s.planet.radius = MAX_PLANET_RADIUS * 1.01;
+        assert_eq!(refused(&s), "planet.radius");
+        s.planet.radius = MAX_PLANET_RADIUS;
+        assert!(s.validate().is_ok());
         let mut s = Settings::default();
         s.weather.clouds.density = -0.5;
         assert_eq!(refused(&s), "weather.clouds.density");

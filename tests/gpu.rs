@@ -371,8 +371,19 @@ fn depth_conventions_see_the_same_clouds() {
 
 #[test]
 fn homogeneous_slab_matches_closed_form_single_scattering() {
+    slab_closed_form(Settings::default().planet.radius);
+}
+
+/// The largest planet radius the settings accept still renders right (a flat world).
+#[test]
+fn the_largest_planet_radius_renders_the_slab_right() {
+    slab_closed_form(nimbus::settings::MAX_PLANET_RADIUS);
+}
+
+fn slab_closed_form(radius: f32) {
     let (bottom, top, extinction) = (1_000.0f32, 1_500.0f32, 0.004f32);
     let mut settings = small_noise(1);
+    settings.planet.radius = radius;
     settings.debug_density = DebugDensity::Slab {
         bottom_altitude: bottom,
         top_altitude: top,

@@ -69,7 +69,9 @@ pub fn jendersie_deon_params(d_um: f32) -> HgDraineParams {
 /// Henyey-Greenstein: (1 - g²) / (4π (1 + g² - 2g cosθ)^1.5).
 pub fn henyey_greenstein(cos_theta: f32, g: f32) -> f32 {
     let g2 = g * g;
-    let denom = (1.0 + g2 - 2.0 * g * cos_theta).max(1e-12);
+    // (1 - g)² + 2g(1 - cos θ): the same value, without the cancellation of 1 + g² - 2g cos θ
+    // near the forward peak in f32.
+    let denom = ((1.0 - g) * (1.0 - g) + 2.0 * g * (1.0 - cos_theta)).max(1e-12);
     (1.0 - g2) / (4.0 * PI * denom * denom.sqrt())
 }
 
@@ -172,6 +174,23 @@ impl PhaseModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn henyey_greenstein_keeps_its_precision_at_the_forward_peak() {
+        let exact = |c: f64, g: f64| {
+            (1.0 - g * g) / (4.0 * std::f64::consts::PI * (1.0 + g * g - 2.0 * g * c).powf(1.5))
+        };
+        for g in [0.5f32, 0.9, 0.988, 0.995] {
+            for c in [1.0f32, 0.9999, 0.999, 0.99, 0.5, 0.0, -1.0] {
+                let want = exact(c as f64, g as f64);
+                let got = henyey_greenstein(c, g) as f64;
+                assert!(
+                    ((got - want) / want).abs() < 1e-5,
+                    "g {g}, cos {c}: {got} vs {want}"
+                );
+            }
+        }
+    }
 
     /// ∫ p dω over the sphere, by the midpoint rule in cosθ (p depends on θ only), in f64 with
     /// many intervals near cosθ = 1 where strongly forward lobes peak.

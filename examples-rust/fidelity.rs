@@ -1,0 +1,366 @@
+//! The fidelity benchmark: the march at the default level against the path-traced reference
+//! (`nimbus::PathTracer`) on the same media. A program, not a test: it prints a table and, with
+//! `--write`, writes docs/fidelity.md and side-by-side PNGs (march | path traced) under
+//! docs/fidelity/.
+//!
+//! - Homogeneous debug slabs (500 m thick, albedo 0.999, ambient and haze off) at optical
+//!   depths 1, 5, 20 and 50, seen from 2 m below at elevations 90°, 55° and 20°, sun at 30°
+//!   and 60°, both phase functions: the ratio of the image means per view.
+//! - A homogeneous sphere (radius 1000 m, σt = 0.02) lit from behind (15° off the line of
+//!   sight) and from the side: the ratio over the disc.
+//! - Two noise-model views (fair cumulus and overcast, from the ground, ambient and haze as the
+//!   presets have them, minus the haze): the ratio of means and FLIP.
+//!
+//! `cargo run --example fidelity [-- --write] [--spp N]` (software Vulkan: minutes).
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use nimbus::demo::{standard_views, tonemap, write_png};
+use nimbus::glam::{Mat4, Vec3};
+use nimbus::lighting::phase::PhaseModel;
+use nimbus::{
+    Camera, DebugDensity, DepthConvention, FrameInputs, Headless, Orders, PathTracer, Preset,
+    Settings, Sun,
+};
+
+const W: u32 = 32;
+const H: u32 = 18;
+/// Frames of a still view the march gets (its temporal pattern fills and settles).
+const MARCH_FRAMES: u32 = 80;
+
+type Image = Vec<[f32; 4]>;
+
+struct Row {
+    scene: String,
+    ratio: f64,
+    /// Relative Monte-Carlo error of the reference's mean (half the spread of two halves).
+    noise: f64,
+    flip: Option<f32>,
+}
+
+/// The mean of two halves and the relative spread between them.
+fn merge(a: &[[f32; 4]], b: &[[f32; 4]]) -> (Vec<[f32; 4]>, f64) {
+    let mean = |img: &[[f32; 4]]| img.iter().map(luminance).sum::<f64>() / img.len() as f64;
+    let (ma, mb) = (mean(a), mean(b));
+    let merged = a
+        .iter()
+        .zip(b)
+        .map(|(p, q)| [0, 1, 2, 3].map(|c| 0.5 * (p[c] + q[c])))
+        .collect();
+    (merged, (ma - mb).abs() / (ma + mb).max(1e-30))
+}
+
+fn sun_at(elevation_deg: f32, azimuth_deg: f32) -> Vec3 {
+    let (e, a) = (elevation_deg.to_radians(), azimuth_deg.to_radians());
+    Vec3::new(e.cos() * a.sin(), e.sin(), -e.cos() * a.cos())
+}
+
+fn frame(eye: Vec3, target: Vec3, fov_deg: f32, sun: Vec3, size: (u32, u32)) -> FrameInputs {
+    let up = if (target - eye).normalize().y.abs() > 0.99 {
+        Vec3::Z
+    } else {
+        Vec3::Y
+    };
+    FrameInputs {
+        camera: Camera {
+            view: Mat4::look_at_rh(eye, target, up),
+            projection: Mat4::perspective_rh(
+                fov_deg.to_radians(),
+                size.0 as f32 / size.1 as f32,
+                1.0,
+                1e6,
+            ),
+            depth: DepthConvention::default(),
+        },
+        sun: Sun {
+            direction: sun,
+            color: Vec3::ONE,
+            illuminance: 10.0,
+        },
+        time: 0.0,
+    }
+}
+
+/// The march's converged (L, T) and the path tracer's, in two independent halves, for one
+/// view.
+fn both(
+    settings: &Settings,
+    f: &FrameInputs,
+    size: (u32, u32),
+    spp: u32,
+) -> Result<(Image, Image, Image), String> {
+    let e = |e: nimbus::Error| e.to_string();
+    let mut h = Headless::new(settings.clone()).map_err(e)?;
+    h.resize(size.0, size.1).map_err(e)?;
+    h.upload_scene(&vec![[0.0; 4]; (size.0 * size.1) as usize], None)
+        .map_err(e)?;
+    for _ in 0..MARCH_FRAMES {
+        h.render(f).map_err(e)?;
+    }
+    let march = h.read_clouds().map_err(e)?;
+    // Two independent halves: their spread tells the Monte-Carlo error of the estimate.
+    let mut halves = Vec::new();
+    for seed in [1u16, 2] {
+        let mut pt = PathTracer::new(h.renderer(), size.0, size.1, Orders::All)
+            .map_err(e)?
+            .with_seed(seed);
+        pt.accumulate(h.renderer(), f, spp.div_ceil(2)).map_err(e)?;
+        halves.push(pt.read(h.renderer()).map_err(e)?);
+    }
+    Ok((march, halves.remove(0), halves.remove(0)))
+}
+
+fn luminance(p: &[f32; 4]) -> f64 {
+    (0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]) as f64
+}
+
+/// Ratio of mean luminances over the pixels `keep` selects (by the reference's pixel).
+fn ratio(march: &[[f32; 4]], traced: &[[f32; 4]], keep: impl Fn(&[f32; 4]) -> bool) -> f64 {
+    let (mut a, mut b) = (0.0, 0.0);
+    for (m, t) in march.iter().zip(traced) {
+        if keep(t) {
+            a += luminance(m);
+            b += luminance(t);
+        }
+    }
+    a / b.max(1e-30)
+}
+
+fn flip(reference: &[[f32; 4]], test: &[[f32; 4]], size: (u32, u32), exposure: f32) -> f32 {
+    let rgb =
+        |img: &[[f32; 4]]| -> Vec<u8> { img.iter().flat_map(|p| tonemap(*p, exposure)).collect() };
+    let r = nv_flip::FlipImageRgb8::with_data(size.0, size.1, &rgb(reference));
+    let t = nv_flip::FlipImageRgb8::with_data(size.0, size.1, &rgb(test));
+    let error = nv_flip::flip(r, t, nv_flip::DEFAULT_PIXELS_PER_DEGREE);
+    nv_flip::FlipPool::from_image(&error).mean()
+}
+
+/// Writes march | path traced side by side, at the exposure that maps the reference's mean
+/// luminance to 0.18.
+fn side_by_side(path: &Path, march: &[[f32; 4]], traced: &[[f32; 4]], size: (u32, u32)) -> f32 {
+    let mean = traced.iter().map(luminance).sum::<f64>() / traced.len() as f64;
+    let exposure = (0.18 / mean.max(1e-12)) as f32;
+    let mut out = Vec::with_capacity(march.len() * 2);
+    for y in 0..size.1 as usize {
+        let row = y * size.0 as usize..(y + 1) * size.0 as usize;
+        out.extend_from_slice(&march[row.clone()]);
+        out.extend_from_slice(&traced[row]);
+    }
+    if let Err(e) = write_png(path, &out, size.0 * 2, size.1, exposure) {
+        eprintln!("{e}");
+    }
+    exposure
+}
+
+fn debug_settings(density: DebugDensity, extinction: f32, phase: PhaseModel) -> Settings {
+    let mut s = Settings {
+        debug_density: density,
+        ..Settings::default()
+    };
+    s.weather.clouds.extinction = extinction;
+    s.weather.clouds.albedo = 0.999;
+    s.weather.ambient_top = Vec3::ZERO;
+    s.weather.ambient_bottom = Vec3::ZERO;
+    s.haze.fade_distance = f32::INFINITY;
+    s.lighting.phase = phase;
+    s
+}
+
+fn main() -> Result<(), String> {
+    let args: Vec<String> = std::env::args().collect();
+    let write = args.iter().any(|a| a == "--write");
+    let spp: u32 = args
+        .iter()
+        .position(|a| a == "--spp")
+        .and_then(|i| args.get(i + 1))
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(64);
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/fidelity");
+    if write {
+        std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    }
+    let phases = [
+        ("Jendersie-d'Eon 10 µm", PhaseModel::default()),
+        (
+            "HG 0.8",
+            PhaseModel::DualLobeHg {
+                g_forward: 0.8,
+                g_backward: 0.0,
+                forward_weight: 1.0,
+            },
+        ),
+    ];
+    let mut rows = Vec::new();
+    let size = (W, H);
+
+    // Slabs.
+    for tau in [1.0f32, 5.0, 20.0, 50.0] {
+        for (phase_name, phase) in phases {
+            for sun_elevation in [30.0f32, 60.0] {
+                let slab = DebugDensity::Slab {
+                    bottom_altitude: 1_000.0,
+                    top_altitude: 1_500.0,
+                    density: 1.0,
+                };
+                let s = debug_settings(slab, tau / 500.0, phase);
+                let mut ratios = Vec::new();
+                for elevation in [90.0f32, 55.0, 20.0] {
+                    let eye = Vec3::new(0.0, 2.0, 0.0);
+                    let target = eye + sun_at(elevation, 180.0) * 100.0;
+                    let f = frame(eye, target, 20.0, sun_at(sun_elevation, 0.0), size);
+                    let (march, a, b) = both(&s, &f, size, spp)?;
+                    let (traced, noise) = merge(&a, &b);
+                    ratios.push((ratio(&march, &traced, |_| true), noise));
+                    if write && elevation == 55.0 && phase_name.starts_with('J') {
+                        let name = format!("slab_tau{tau}_sun{sun_elevation}.png");
+                        side_by_side(&dir.join(name), &march, &traced, size);
+                    }
+                }
+                let scene = format!(
+                    "slab τ = {tau}, {phase_name}, sun {sun_elevation}° (views 90°/55°/20°: {})",
+                    ratios
+                        .iter()
+                        .map(|r| format!("{:.3}", r.0))
+                        .collect::<Vec<_>>()
+                        .join(" / ")
+                );
+                let noise = ratios.iter().map(|r| r.1).fold(0.0, f64::max);
+                ratios.sort_by(|a, b| a.0.total_cmp(&b.0));
+                println!(
+                    "{scene}: median {:.4} (reference ±{:.1}%)",
+                    ratios[1].0,
+                    noise * 100.0
+                );
+                rows.push(Row {
+                    scene,
+                    ratio: ratios[1].0,
+                    noise,
+                    flip: None,
+                });
+            }
+        }
+    }
+
+    // The sphere, from behind and from the side.
+    let center = Vec3::new(0.0, 3_000.0, -4_000.0);
+    let sphere = DebugDensity::Sphere {
+        center,
+        radius: 1_000.0,
+        density: 1.0,
+    };
+    let eye = Vec3::new(0.0, 3_000.0, 0.0);
+    // From behind: the sun beyond the sphere, 15° above the line of sight.
+    let beyond = (center - eye).normalize();
+    let behind = Mat4::from_axis_angle(Vec3::X, 15f32.to_radians()).transform_vector3(beyond);
+    for (name, sun) in [("behind (15° off)", behind.normalize()), ("side", Vec3::X)] {
+        let s = debug_settings(sphere, 0.02, PhaseModel::default());
+        let size = (W * 2, W * 2);
+        let f = frame(eye, center, 36.0, sun, size);
+        let (march, a, b) = both(&s, &f, size, spp)?;
+        let (traced, noise) = merge(&a, &b);
+        let on_disc = ratio(&march, &traced, |t| t[3] < 0.5);
+        let exposure = if write {
+            side_by_side(
+                &dir.join(format!("sphere_{}.png", &name[..4])),
+                &march,
+                &traced,
+                size,
+            )
+        } else {
+            1.0
+        };
+        let flip_mean = flip(&traced, &march, size, exposure);
+        let scene = format!("sphere r 1000 m, σt 0.02, sun {name}");
+        println!("{scene}: disc ratio {on_disc:.4}, FLIP {flip_mean:.3}");
+        rows.push(Row {
+            scene,
+            ratio: on_disc,
+            noise,
+            flip: Some(flip_mean),
+        });
+    }
+
+    // Noise-model views.
+    let ground = &standard_views()[0];
+    for preset in [Preset::Sparse, Preset::Overcast] {
+        let mut s = Settings {
+            weather: preset.weather(),
+            ..Settings::default()
+        };
+        s.haze.fade_distance = f32::INFINITY;
+        s.weather.high_layer.coverage = 0.0;
+        let size = (W * 2, H * 2);
+        let f = ground.frame(size.0, size.1, 0.0);
+        let (march, a, b) = both(&s, &f, size, spp)?;
+        let (traced, noise) = merge(&a, &b);
+        let r = ratio(&march, &traced, |_| true);
+        let exposure = if write {
+            side_by_side(
+                &dir.join(format!("{preset:?}_ground.png").to_lowercase()),
+                &march,
+                &traced,
+                size,
+            )
+        } else {
+            1.0
+        };
+        let flip_mean = flip(&traced, &march, size, exposure);
+        let scene = format!("{preset:?} from the ground (noise model)");
+        println!("{scene}: ratio {r:.4}, FLIP {flip_mean:.3}");
+        rows.push(Row {
+            scene,
+            ratio: r,
+            noise,
+            flip: Some(flip_mean),
+        });
+    }
+
+    if write {
+        let mut md = String::new();
+        let _ = writeln!(
+            md,
+            "# Fidelity: the march against the path-traced reference\n\n\
+             Generated by `cargo run --example fidelity -- --write --spp {spp}` on\n\
+             software Vulkan ({W}×{H} slab views, {}×{} sphere, {}×{} noise views; the march at\n\
+             the default level, {MARCH_FRAMES} frames of a still view; the path tracer at {spp}\n\
+             samples per pixel). Ratio: the march's mean luminance over the reference's (the\n\
+             median of the three views for slabs, the disc for the sphere). FLIP: mean, on\n\
+             images tone-mapped at the reference's exposure. Pictures: march left, path traced\n\
+             right. Reference noise: half the relative spread between two independent halves of the\n\
+             path-traced samples (the worst view for slabs).\n\n\
+             | scene | march / path traced | reference noise | FLIP |\n| --- | --- | --- | --- |",
+            W * 2,
+            W * 2,
+            W * 2,
+            H * 2
+        );
+        for r in &rows {
+            let flip = r
+                .flip
+                .map(|f| format!("{f:.3}"))
+                .unwrap_or_else(|| "-".into());
+            let _ = writeln!(
+                md,
+                "| {} | {:.4} | ±{:.1}% | {flip} |",
+                r.scene,
+                r.ratio,
+                r.noise * 100.0
+            );
+        }
+        md.push_str("\n## Pictures\n\n");
+        let mut names: Vec<String> = std::fs::read_dir(&dir)
+            .map_err(|e| e.to_string())?
+            .filter_map(|e| e.ok()?.file_name().into_string().ok())
+            .filter(|n| n.ends_with(".png"))
+            .collect();
+        names.sort();
+        for n in names {
+            let _ = writeln!(md, "- `{n}`: ![{n}](fidelity/{n})");
+        }
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/fidelity.md");
+        std::fs::write(&path, md).map_err(|e| e.to_string())?;
+        println!("wrote {}", path.display());
+    }
+    Ok(())
+}
