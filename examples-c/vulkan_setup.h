@@ -766,8 +766,10 @@ static inline void vks_layout_scope(VkImageLayout layout, int as_source, VkPipel
     *access = as_source ? writes : (reads | writes);
 }
 
-static inline void vks_image_barrier(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspect, VkImageLayout from,
-                                     VkImageLayout to) {
+/* A layout barrier over mips [mip, mip + mips) and layers [layer, layer + layers). */
+static inline void vks_image_barrier_range(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspect,
+                                           uint32_t mip, uint32_t mips, uint32_t layer, uint32_t layers,
+                                           VkImageLayout from, VkImageLayout to) {
     VkImageMemoryBarrier b;
     VkPipelineStageFlags src, dst;
     memset(&b, 0, sizeof b);
@@ -780,9 +782,16 @@ static inline void vks_image_barrier(VkCommandBuffer cmd, VkImage image, VkImage
     b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
     b.image = image;
     b.subresourceRange.aspectMask = aspect;
-    b.subresourceRange.levelCount = 1;
-    b.subresourceRange.layerCount = 1;
+    b.subresourceRange.baseMipLevel = mip;
+    b.subresourceRange.levelCount = mips;
+    b.subresourceRange.baseArrayLayer = layer;
+    b.subresourceRange.layerCount = layers;
     vkCmdPipelineBarrier(cmd, src, dst, 0, 0, NULL, 0, NULL, 1, &b);
+}
+
+static inline void vks_image_barrier(VkCommandBuffer cmd, VkImage image, VkImageAspectFlags aspect, VkImageLayout from,
+                                     VkImageLayout to) {
+    vks_image_barrier_range(cmd, image, aspect, 0, 1, 0, 1, from, to);
 }
 
 /* Moves `img` from the layout the host's command stream left it in to `to` (a barrier even

@@ -153,6 +153,37 @@ fn side_by_side(path: &Path, march: &[[f32; 4]], traced: &[[f32; 4]], size: (u32
     exposure
 }
 
+/// One view's row: the ratio over the pixels `keep` selects, the reference's noise, FLIP,
+/// and the side-by-side picture when `png` is given.
+fn compare(
+    scene: String,
+    settings: &Settings,
+    f: &FrameInputs,
+    size: (u32, u32),
+    spp: u32,
+    png: Option<std::path::PathBuf>,
+    keep: impl Fn(&[f32; 4]) -> bool,
+) -> Result<Row, String> {
+    let (march, a, b) = both(settings, f, size, spp)?;
+    let (traced, noise) = merge(&a, &b);
+    let r = ratio(&march, &traced, keep);
+    let exposure = match png {
+        Some(path) => side_by_side(&path, &march, &traced, size),
+        None => 1.0,
+    };
+    let flip_mean = flip(&traced, &march, size, exposure);
+    println!(
+        "{scene}: ratio {r:.4} (reference ±{:.1}%), FLIP {flip_mean:.3}",
+        noise * 100.0
+    );
+    Ok(Row {
+        scene,
+        ratio: r,
+        noise,
+        flip: Some(flip_mean),
+    })
+}
+
 fn debug_settings(density: DebugDensity, extinction: f32, phase: PhaseModel) -> Settings {
     let mut s = Settings {
         debug_density: density,
@@ -253,32 +284,14 @@ fn main() -> Result<(), String> {
     // From behind: the sun beyond the sphere, 15° above the line of sight.
     let beyond = (center - eye).normalize();
     let behind = Mat4::from_axis_angle(Vec3::X, 15f32.to_radians()).transform_vector3(beyond);
+    let picture = |name: String| write.then(|| dir.join(name));
     for (name, sun) in [("behind (15° off)", behind.normalize()), ("side", Vec3::X)] {
         let s = debug_settings(sphere, 0.02, PhaseModel::default());
         let size = (W * 2, W * 2);
         let f = frame(eye, center, 36.0, sun, size);
-        let (march, a, b) = both(&s, &f, size, spp)?;
-        let (traced, noise) = merge(&a, &b);
-        let on_disc = ratio(&march, &traced, |t| t[3] < 0.5);
-        let exposure = if write {
-            side_by_side(
-                &dir.join(format!("sphere_{}.png", &name[..4])),
-                &march,
-                &traced,
-                size,
-            )
-        } else {
-            1.0
-        };
-        let flip_mean = flip(&traced, &march, size, exposure);
-        let scene = format!("sphere r 1000 m, σt 0.02, sun {name}");
-        println!("{scene}: disc ratio {on_disc:.4}, FLIP {flip_mean:.3}");
-        rows.push(Row {
-            scene,
-            ratio: on_disc,
-            noise,
-            flip: Some(flip_mean),
-        });
+        let png = picture(format!("sphere_{}.png", &name[..4]));
+        let scene = format!("sphere r 1000 m, σt 0.02, sun {name} (over the disc)");
+        rows.push(compare(scene, &s, &f, size, spp, png, |t| t[3] < 0.5)?);
     }
 
     // Noise-model views.
@@ -292,28 +305,9 @@ fn main() -> Result<(), String> {
         s.weather.high_layer.coverage = 0.0;
         let size = (W * 2, H * 2);
         let f = ground.frame(size.0, size.1, 0.0);
-        let (march, a, b) = both(&s, &f, size, spp)?;
-        let (traced, noise) = merge(&a, &b);
-        let r = ratio(&march, &traced, |_| true);
-        let exposure = if write {
-            side_by_side(
-                &dir.join(format!("{preset:?}_ground.png").to_lowercase()),
-                &march,
-                &traced,
-                size,
-            )
-        } else {
-            1.0
-        };
-        let flip_mean = flip(&traced, &march, size, exposure);
+        let png = picture(format!("{preset:?}_ground.png").to_lowercase());
         let scene = format!("{preset:?} from the ground (noise model)");
-        println!("{scene}: ratio {r:.4}, FLIP {flip_mean:.3}");
-        rows.push(Row {
-            scene,
-            ratio: r,
-            noise,
-            flip: Some(flip_mean),
-        });
+        rows.push(compare(scene, &s, &f, size, spp, png, |_| true)?);
     }
 
     if write {

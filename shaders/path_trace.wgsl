@@ -8,6 +8,11 @@
 //   et al. 2014, "Residual ratio tracking"), and samples its new direction from the phase
 //   function exactly (Henyey-Greenstein inverted in closed form; the Draine lobe by rejection
 //   from its HG factor, accepted with (1 + α cos²θ) / (1 + α));
+// - the sun is its real disc (0.533°; the march's sun, and the single-scattering-only mode's,
+//   is a direction): it is reached both by
+//   sampling the disc (next-event estimation) and by phase-sampled directions that leave the
+//   medium inside it, combined with the balance heuristic (Veach 1997), so the forward peak of
+//   a cloud phase function (g 0.988: 1100 / sr) does not turn into fireflies;
 // - every order, ended only by escape or Russian roulette on the weight;
 // - a path that leaves the medium after scattering sees the sky the march's ambient terms
 //   stand for: `ambient_top` above the horizontal, `ambient_bottom` below it and on the ground.
@@ -23,6 +28,10 @@ struct PathParams {
 @group(0) @binding(7) var<storage, read> pt: PathParams;
 
 var<private> rng_state: u32;
+
+// The sun's disc: cos of its angular radius (0.2665°) and its solid angle (sr).
+const SUN_COS: f32 = 0.99998918;
+const SUN_SOLID_ANGLE: f32 = 6.7987e-5;
 
 // PCG (O'Neill 2014), the RXS-M-XS output: one uniform number in [0, 1).
 fn rand() -> f32 {
@@ -172,20 +181,41 @@ fn trace(@builtin(global_invocation_id) id: vec3u) {
             var max_t = u.layer.w;
             var weight = 1.0;
             var order = 0u;
+            // The phase pdf of the direction the path travels in (for the MIS weights).
+            var last_pdf = 0.0;
             for (var guard = 0u; guard < 100000u; guard++) {
                 let t = collide(o, d, max_t, m);
                 if (t < 0.0) {
                     if (order > 0u) {
                         radiance += weight * sky(o, d);
+                        // A phase-sampled direction that leaves the medium inside the sun's
+                        // disc: its share by the balance heuristic.
+                        if (dot(d, sun) >= SUN_COS && !blocked_by_ground(o, d)) {
+                            let mis = last_pdf / (last_pdf + 1.0 / SUN_SOLID_ANGLE);
+                            radiance += weight * sun_radiance / SUN_SOLID_ANGLE * mis;
+                        }
                     }
                     break;
                 }
                 o += d * t;
                 order += 1u;
                 weight *= albedo;
-                if (!blocked_by_ground(o, sun)) {
-                    let p = phase_eval(model, u.phase, dot(sun, d), 1.0);
-                    radiance += weight * sun_radiance * p * transmittance(o, sun, 1e9, m);
+                // Next-event estimation: a direction in the sun's disc (radiance E / Ω over it,
+                // so radiance / pdf = E).
+                // Single scattering alone keeps the sun a direction, as the closed forms and
+                // the march have it (near the forward peak the disc's average differs).
+                let single = pt.mode.x == 1u;
+                var to_sun = sun;
+                if (!single) {
+                    to_sun = turn(sun, 1.0 - rand() * (1.0 - SUN_COS));
+                }
+                if (!blocked_by_ground(o, to_sun)) {
+                    let p = phase_eval(model, u.phase, dot(to_sun, d), 1.0);
+                    var mis = 1.0;
+                    if (!single) {
+                        mis = (1.0 / SUN_SOLID_ANGLE) / (1.0 / SUN_SOLID_ANGLE + p);
+                    }
+                    radiance += weight * sun_radiance * p * mis * transmittance(o, to_sun, 1e9, m);
                 }
                 if (pt.mode.x == 1u) {
                     break;
@@ -197,7 +227,9 @@ fn trace(@builtin(global_invocation_id) id: vec3u) {
                     }
                     weight /= q;
                 }
-                d = turn(d, sample_phase_cos(model, u.phase));
+                let next = turn(d, sample_phase_cos(model, u.phase));
+                last_pdf = phase_eval(model, u.phase, dot(next, d), 1.0);
+                d = next;
                 max_t = 1e9;
             }
         } else {

@@ -19,8 +19,8 @@ use crate::device::gpu_scope;
 use crate::error::{Error, Result};
 use crate::frame::FrameInputs;
 use crate::gpu::bind_cache::BindCache;
-use crate::gpu::compute::{frame_pipeline, params_entry, texture_entry, FRAME_PARAMS_USAGE};
-use crate::gpu::march::MarchUniforms;
+use crate::gpu::compute::{frame_pipeline, FRAME_PARAMS_USAGE};
+use crate::gpu::march::{medium_entries, medium_layout_entries, medium_views, MarchUniforms};
 use crate::gpu::shaders::DepthKind;
 use crate::Renderer;
 
@@ -75,9 +75,6 @@ impl PathTracer {
         }
         let (device, _, _, _) = renderer.medium();
         gpu_scope(device, || {
-            use wgpu::TextureSampleType as S;
-            use wgpu::TextureViewDimension as D;
-            let filterable = S::Float { filterable: true };
             let storage = |binding, read_only, size: u64| wgpu::BindGroupLayoutEntry {
                 binding,
                 visibility: wgpu::ShaderStages::COMPUTE,
@@ -95,21 +92,13 @@ impl PathTracer {
                 DepthKind::Depth,
                 "trace",
                 &[
-                    params_entry::<MarchUniforms>(0),
-                    texture_entry(1, filterable, D::D3),
-                    texture_entry(2, filterable, D::D3),
-                    texture_entry(3, filterable, D::D2),
-                    texture_entry(4, filterable, D::D2),
-                    wgpu::BindGroupLayoutEntry {
-                        binding: 5,
-                        visibility: wgpu::ShaderStages::COMPUTE,
-                        ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                        count: None,
-                    },
-                    storage(6, false, 16),
-                    storage(7, true, std::mem::size_of::<PathParams>() as u64),
-                    texture_entry(9, filterable, D::D2),
-                ],
+                    medium_layout_entries().as_slice(),
+                    &[
+                        storage(6, false, 16),
+                        storage(7, true, std::mem::size_of::<PathParams>() as u64),
+                    ],
+                ]
+                .concat(),
             );
             let buffer = |label, size, usage| {
                 device.create_buffer(&wgpu::BufferDescriptor {
@@ -189,46 +178,25 @@ impl PathTracer {
                 queue.submit([enc.finish()]);
             }
             queue.write_buffer(&self.uniforms, 0, bytemuck::bytes_of(&uniforms));
-            let tex = |b, v| wgpu::BindGroupEntry {
-                binding: b,
-                resource: wgpu::BindingResource::TextureView(v),
-            };
-            let views = [
-                &noise.base_view,
-                &noise.detail_view,
-                weather.0,
-                &noise.blue_noise_view,
-                weather.1,
-            ];
+            let views = medium_views(noise, weather);
             let layout = &self.layout;
             let (u, p, a) = (&self.uniforms, &self.params, &self.accum);
             let bind = self.binds.get(u, &views, || {
+                let mut entries = medium_entries(u, noise, weather);
+                entries.extend([
+                    wgpu::BindGroupEntry {
+                        binding: 6,
+                        resource: a.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 7,
+                        resource: p.as_entire_binding(),
+                    },
+                ]);
                 device.create_bind_group(&wgpu::BindGroupDescriptor {
                     label: Some("nimbus path trace"),
                     layout,
-                    entries: &[
-                        wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: u.as_entire_binding(),
-                        },
-                        tex(1, &noise.base_view),
-                        tex(2, &noise.detail_view),
-                        tex(3, weather.0),
-                        tex(4, &noise.blue_noise_view),
-                        wgpu::BindGroupEntry {
-                            binding: 5,
-                            resource: wgpu::BindingResource::Sampler(&noise.sampler),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 6,
-                            resource: a.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 7,
-                            resource: p.as_entire_binding(),
-                        },
-                        tex(9, weather.1),
-                    ],
+                    entries: &entries,
                 })
             });
             let mut left = samples;

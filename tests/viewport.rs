@@ -4,7 +4,7 @@
 //! stay exactly as they were; bad rectangles are refused.
 
 mod common;
-use common::{quiet, setup, small_noise, H, W};
+use common::{halfs, quiet, rgba, setup, small_noise, H, W};
 
 use nimbus::demo::standard_views;
 use nimbus::device::{read_texture, texture_2d};
@@ -37,24 +37,6 @@ fn upload(queue: &wgpu::Queue, texture: &wgpu::Texture, bytes: &[u8], bpp: u32) 
         },
         texture.size(),
     );
-}
-
-fn halfs(pixels: &[[f32; 4]]) -> Vec<u8> {
-    pixels
-        .iter()
-        .flat_map(|p| p.map(|c| half::f16::from_f32(c).to_bits()))
-        .flat_map(u16::to_le_bytes)
-        .collect()
-}
-
-fn rgba(bytes: &[u8]) -> Vec<[f32; 4]> {
-    bytes
-        .chunks_exact(8)
-        .map(|c| {
-            let h = |i: usize| half::f16::from_le_bytes([c[i], c[i + 1]]).to_f32();
-            [h(0), h(2), h(4), h(6)]
-        })
-        .collect()
 }
 
 #[test]

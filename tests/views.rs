@@ -6,7 +6,7 @@
 //! shared, and a steady split-screen loop makes no bind groups.
 
 mod common;
-use common::{setup, small_noise, H, W};
+use common::{halfs, rgba, setup, small_noise, H, W};
 
 use glam::Mat4;
 use nimbus::demo::standard_views;
@@ -19,24 +19,6 @@ use wgpu::TextureUsages as U;
 
 const SCENE: [f32; 4] = [0.2, 0.35, 0.7, 1.0];
 const FRAMES: u32 = 8;
-
-fn halfs(pixels: &[[f32; 4]]) -> Vec<u8> {
-    pixels
-        .iter()
-        .flat_map(|p| p.map(|c| half::f16::from_f32(c).to_bits()))
-        .flat_map(u16::to_le_bytes)
-        .collect()
-}
-
-fn rgba(bytes: &[u8]) -> Vec<[f32; 4]> {
-    bytes
-        .chunks_exact(8)
-        .map(|c| {
-            let h = |i: usize| half::f16::from_le_bytes([c[i], c[i + 1]]).to_f32();
-            [h(0), h(2), h(4), h(6)]
-        })
-        .collect()
-}
 
 /// Camera `which` at frame `i`: it turns a little every frame and the wind moves on, so the
 /// history must be reprojected.

@@ -238,6 +238,68 @@ impl MarchUniforms {
     }
 }
 
+/// The layout entries of shaders/medium.wgsl's bindings (0-5 and 9), shared by every pass
+/// that sees the medium (the march, the path tracer).
+pub(crate) fn medium_layout_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
+    use wgpu::TextureViewDimension as D;
+    let filterable = wgpu::TextureSampleType::Float { filterable: true };
+    vec![
+        params_entry::<MarchUniforms>(0),
+        texture_entry(1, filterable, D::D3),
+        texture_entry(2, filterable, D::D3),
+        texture_entry(3, filterable, D::D2),
+        texture_entry(4, filterable, D::D2),
+        wgpu::BindGroupLayoutEntry {
+            binding: 5,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+            count: None,
+        },
+        texture_entry(9, filterable, D::D2),
+    ]
+}
+
+/// The texture views the medium's bind group holds, in binding order (its cache key).
+pub(crate) fn medium_views<'a>(
+    noise: &'a NoiseTextures,
+    weather: (&'a wgpu::TextureView, &'a wgpu::TextureView),
+) -> [&'a wgpu::TextureView; 5] {
+    [
+        &noise.base_view,
+        &noise.detail_view,
+        weather.0,
+        &noise.blue_noise_view,
+        weather.1,
+    ]
+}
+
+/// The bind-group entries of the medium's bindings (0-5 and 9).
+pub(crate) fn medium_entries<'a>(
+    uniforms: &'a wgpu::Buffer,
+    noise: &'a NoiseTextures,
+    weather: (&'a wgpu::TextureView, &'a wgpu::TextureView),
+) -> Vec<wgpu::BindGroupEntry<'a>> {
+    let tex = |b, v| wgpu::BindGroupEntry {
+        binding: b,
+        resource: wgpu::BindingResource::TextureView(v),
+    };
+    vec![
+        wgpu::BindGroupEntry {
+            binding: 0,
+            resource: uniforms.as_entire_binding(),
+        },
+        tex(1, &noise.base_view),
+        tex(2, &noise.detail_view),
+        tex(3, weather.0),
+        tex(4, &noise.blue_noise_view),
+        wgpu::BindGroupEntry {
+            binding: 5,
+            resource: wgpu::BindingResource::Sampler(&noise.sampler),
+        },
+        tex(9, weather.1),
+    ]
+}
+
 pub(crate) struct MarchPipeline {
     pub layout: wgpu::BindGroupLayout,
     pub pipeline: wgpu::ComputePipeline,
@@ -249,7 +311,6 @@ impl MarchPipeline {
     pub(crate) fn new(device: &wgpu::Device, kind: DepthKind) -> Self {
         use wgpu::TextureSampleType as S;
         use wgpu::TextureViewDimension as D;
-        let filterable = S::Float { filterable: true };
         let depth_type = match kind {
             DepthKind::Depth => S::Depth,
             DepthKind::R32Float => S::Float { filterable: false },
@@ -261,22 +322,14 @@ impl MarchPipeline {
             kind,
             "march",
             &[
-                params_entry::<MarchUniforms>(0),
-                texture_entry(1, filterable, D::D3),
-                texture_entry(2, filterable, D::D3),
-                texture_entry(3, filterable, D::D2),
-                texture_entry(4, filterable, D::D2),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 5,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
-                    count: None,
-                },
-                texture_entry(6, depth_type, D::D2),
-                storage_entry(7, wgpu::TextureFormat::Rgba16Float),
-                storage_entry(8, wgpu::TextureFormat::Rgba32Float),
-                texture_entry(9, filterable, D::D2),
-            ],
+                medium_layout_entries().as_slice(),
+                &[
+                    texture_entry(6, depth_type, D::D2),
+                    storage_entry(7, wgpu::TextureFormat::Rgba16Float),
+                    storage_entry(8, wgpu::TextureFormat::Rgba32Float),
+                ],
+            ]
+            .concat(),
         );
         Self {
             layout,
@@ -304,39 +357,16 @@ impl MarchPipeline {
             binding: b,
             resource: wgpu::BindingResource::TextureView(v),
         };
-        let views = [
-            &noise.base_view,
-            &noise.detail_view,
-            weather.0,
-            &noise.blue_noise_view,
-            scene_depth,
-            march_out,
-            depth_out,
-            weather.1,
-        ];
+        let mut views = medium_views(noise, weather).to_vec();
+        views.extend([scene_depth, march_out, depth_out]);
         let layout = &self.layout;
         let bind = self.binds.get(uniforms, &views, || {
+            let mut entries = medium_entries(uniforms, noise, weather);
+            entries.extend([tex(6, scene_depth), tex(7, march_out), tex(8, depth_out)]);
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("nimbus march"),
                 layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: uniforms.as_entire_binding(),
-                    },
-                    tex(1, &noise.base_view),
-                    tex(2, &noise.detail_view),
-                    tex(3, weather.0),
-                    tex(4, &noise.blue_noise_view),
-                    wgpu::BindGroupEntry {
-                        binding: 5,
-                        resource: wgpu::BindingResource::Sampler(&noise.sampler),
-                    },
-                    tex(6, scene_depth),
-                    tex(7, march_out),
-                    tex(8, depth_out),
-                    tex(9, weather.1),
-                ],
+                entries: &entries,
             })
         });
         timed_dispatch(

@@ -722,26 +722,10 @@ static void test_layouts_and_semaphores(void) {
 
 /* ---- since ABI 0.4: one mip and one layer of a bigger image ----------------------------------- */
 
-/* A barrier over mips [mip, mip + mips) and layers [layer, layer + layers) of `image`. */
+/* A color barrier over mips [mip, mip + mips) and layers [layer, layer + layers) of `image`. */
 static void levels_barrier(VkCommandBuffer cmd, VkImage image, uint32_t mip, uint32_t mips, uint32_t layer,
                            uint32_t layers, VkImageLayout from, VkImageLayout to) {
-    VkImageMemoryBarrier b;
-    VkPipelineStageFlags src, dst;
-    memset(&b, 0, sizeof b);
-    b.sType = VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER;
-    vks_layout_scope(from, 1, &src, &b.srcAccessMask);
-    vks_layout_scope(to, 0, &dst, &b.dstAccessMask);
-    b.oldLayout = from;
-    b.newLayout = to;
-    b.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    b.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
-    b.image = image;
-    b.subresourceRange.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
-    b.subresourceRange.baseMipLevel = mip;
-    b.subresourceRange.levelCount = mips;
-    b.subresourceRange.baseArrayLayer = layer;
-    b.subresourceRange.layerCount = layers;
-    vkCmdPipelineBarrier(cmd, src, dst, 0, 0, NULL, 0, NULL, 1, &b);
+    vks_image_barrier_range(cmd, image, VK_IMAGE_ASPECT_COLOR_BIT, mip, mips, layer, layers, from, to);
 }
 
 /* A 2W x 2H image with 2 mips and 2 layers: Nimbus composites into mip 1 (W x H) of layer 1,

@@ -50,3 +50,23 @@ pub fn quiet(mut s: Settings) -> Settings {
 pub fn f16(v: f32) -> f32 {
     half::f16::from_f32(v).to_f32()
 }
+
+/// Pixels as RGBA16F bytes (for uploads).
+pub fn halfs(pixels: &[[f32; 4]]) -> Vec<u8> {
+    pixels
+        .iter()
+        .flat_map(|p| p.map(|c| half::f16::from_f32(c).to_bits()))
+        .flat_map(u16::to_le_bytes)
+        .collect()
+}
+
+/// RGBA16F bytes (a readback) as pixels.
+pub fn rgba(bytes: &[u8]) -> Vec<[f32; 4]> {
+    bytes
+        .chunks_exact(8)
+        .map(|c| {
+            let h = |i: usize| half::f16::from_le_bytes([c[i], c[i + 1]]).to_f32();
+            [h(0), h(2), h(4), h(6)]
+        })
+        .collect()
+}
