@@ -1,11 +1,12 @@
 //! Benchmark: a matrix of presets × camera views × sizes × quality levels, with GPU time per
 //! pass (timestamp queries; wall time beside it), rays traced, GPU memory, and the error of
 //! every image against a converged reference of the same scene and time (FLIP mean and 99th
-//! percentile). Also: cost against pixel count, the cost of a weather bake, and a short
-//! moving-camera flight. Writes bench.csv, bench.md and chart.png into the output folder.
+//! percentile). Also: cost against pixel count, the cost of a weather bake, a short
+//! moving-camera flight, and several cameras on one renderer (a stereo pair, a cube probe). Writes bench.csv, bench.md and chart.png into the output folder.
 //!
 //! Usage: cargo run --release --example bench -- [--quick] [--out DIR]
 //!        cargo run --release --example bench -- --from-csv DIR/bench.csv   (re-draw from a run)
+//!        cargo run --release --example bench -- [--quick] --views-only     (the views section)
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -15,6 +16,9 @@ use nimbus::demo::{standard_views, tonemap, DemoView, Occluder};
 use nimbus::glam::Vec3;
 use nimbus::settings::{Quality, Temporal, TraceResolution};
 use nimbus::{Headless, Settings, Weather};
+
+#[path = "bench_views.rs"]
+mod bench_views;
 
 const VIEW_NAMES: [&str; 4] = ["ground_up", "horizon", "inside", "above"];
 /// Frames a temporal configuration renders from a reset before its image is judged: the
@@ -525,6 +529,11 @@ fn run() -> Result<(), String> {
     while let Some(a) = args.next() {
         match a.as_str() {
             "--quick" => quick = true,
+            "--views-only" => {
+                // Only the several-cameras section (printed).
+                bench_views::views_section(quick)?;
+                return Ok(());
+            }
             "--out" => out = PathBuf::from(args.next().ok_or("--out needs a folder")?),
             "--from-csv" => {
                 // Re-draw the chart and the tables from an earlier run's CSV.
@@ -690,6 +699,7 @@ fn run() -> Result<(), String> {
             f.k, f.wall_ms, f.flip_mean, f.flip_p99
         );
     }
+    md.push_str(&bench_views::views_section(quick)?);
     let _ = writeln!(md, "\nEvery configuration: `bench.csv`. Chart: `chart.png` (one bar per row of the CSV, in order, log scale with a grey line per decade from 1 ms; green low, blue medium, orange high, red ultra, grey the ablation).");
     std::fs::write(out.join("bench.md"), &md).map_err(|e| e.to_string())?;
     println!(
