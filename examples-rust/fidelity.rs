@@ -362,9 +362,9 @@ fn main() -> Result<(), String> {
             "\n## Reading it\n\n\
              The targets (issue 11): every slab view within 20% of the path tracer (median within\n\
              10%) from τ = 1 to 50, the sphere within 20% on the disc, FLIP ≤ 0.1 on the noise-model\n\
-             views. The march at the default level meets none of them today beyond τ ≈ 1: its\n\
-             multiple scattering (Wrenninge's octaves) cannot carry light deep into a cloud, so thick\n\
-             media come out orders of magnitude too dark, while thin ones come out too bright (the\n\
+             views. The march at the default level meets none of them today: its multiple\n\
+             scattering (Wrenninge's octaves) cannot carry light deep into a cloud, so thick media\n\
+             come out orders of magnitude too dark, while thin ones come out too bright (the\n\
              octaves add light a thin slab does not scatter). This table is the yardstick for the\n\
              multiple-scattering model that is to replace them.\n\n\
              The path tracer is unbiased (tests/reference.rs checks it against closed forms and\n\
