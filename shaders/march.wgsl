@@ -104,6 +104,19 @@ fn sun_optical_depth(p: vec3f, n: u32, footprint: f32) -> f32 {
     return tau * u.shape.z;
 }
 
+// Optical depth straight down from p (density sigma_t there) to the bottom of the medium,
+// for the independent-column diffuse model: exact for the debug slab and sphere; for the noise
+// model the column below is taken as dense as the sample, down to the layer's base.
+fn column_below(p: vec3f, local_up: vec3f, sigma_t: f32) -> f32 {
+    let mode = debug_mode();
+    if (mode == DEBUG_SPHERE) {
+        let s = ball_segment(p, -local_up, u.debug_sphere.xyz, u.debug_sphere.w, 1e9);
+        return select(0.0, s.a.y, s.count > 0u) * sigma_t;
+    }
+    let base = select(u.layer.x, u.debug.x, mode == DEBUG_SLAB);
+    return max(altitude(p, u.planet.xyz, u.planet.w) - base, 0.0) * sigma_t;
+}
+
 @compute @workgroup_size(8, 8, 1)
 fn march(@builtin(global_invocation_id) id: vec3u) {
     // The march runs on the sparse grid: invocation `id` traces grid pixel id * k + offset.
@@ -178,6 +191,9 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
             c_i *= u.ms.w;
         }
         var depth_weighted = 0.0;
+        // Optical depth from where the ray entered the current cloud to the step start.
+        var tau_view = 0.0;
+        let delta_eddington_on = u32(u.ms_model.x) == 2u;
         let inv_n = 1.0 / f32(n);
         // Coarse-then-fine (Schneider 2015): while nothing has been found, steps COARSE times as
         // long probe the cheap base-shape density, which bounds the full density from above, so
@@ -218,6 +234,7 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
                 empty_run += 1u;
                 if (coarse_on && empty_run >= FINE_EMPTY) {
                     fine = false;
+                    tau_view = 0.0;
                 }
                 continue;
             }
@@ -233,6 +250,29 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
                 a_i *= u.ms.y;
                 b_i *= u.ms.z;
             }
+            let sample_tau_view = tau_view + 0.5 * sigma_t * dt;
+            if (delta_eddington_on) {
+                // The independent column through the sample (the local vertical): its top is
+                // tau * mu0 above (the light march's optical depth, projected), its bottom
+                // either the column below or, seen from below, where the view ray came in.
+                // A sun near or below the local horizon still lights a bounded cloud through
+                // its sides: the column is lit at no less than DE_MIN_MU0.
+                let local_up = normalize(p + up * radius);
+                let mu0 = max(dot(u.sun.xyz, local_up), DE_MIN_MU0);
+                let mu_view = dot(dir, local_up);
+                let column = column_below(p, local_up, sigma_t);
+                // Looking up, the view ray's own optical depth since it entered the cloud,
+                // projected on the vertical, is the column below as the ray measured it. Blended
+                // in over the first 15° above the horizon (no seam at the horizon).
+                let seen = min(column, sample_tau_view * max(mu_view, 0.0));
+                var below = mix(column, seen, smoothstep(0.0, 0.25, mu_view));
+                // Looking toward the sun, the camera sees the cloud's dark side: light escapes
+                // there through the boundary the view ray came in by, however the cloud is
+                // shaped, so that boundary is no farther than the ray's own optical depth
+                // (for a slab, never closer than the column: no change).
+                below = mix(below, min(below, sample_tau_view), smoothstep(0.0, 0.5, cos_theta));
+                ms += delta_eddington_source(tau, below, mu0, mu_view, cos_theta, u.shape.w, u.ms_model.y, phase_oct[0]);
+            }
             let hf = clamp((altitude(p, up, radius) - u.layer.x) / thickness, 0.0, 1.0);
             let ambient = mix(u.ambient_bottom.rgb, u.ambient_top.rgb, hf);
             let source = u.shape.w * sigma_t * (sun_radiance * ms + ambient);
@@ -241,7 +281,13 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
             radiance += transmittance * source * (1.0 - step_t) / sigma_t;
             depth_weighted += transmittance * (1.0 - step_t) * t;
             transmittance *= step_t;
+            tau_view += sigma_t * dt;
             if (transmittance < u.march.z) {
+                // Early exit with an estimate of what the rest of the ray would add: the medium
+                // ahead taken as this sample's, without end (∫ T e^{-σt x} S dx = T S / σt), so
+                // the light the remaining weight T would have gathered is not dropped. The
+                // transmittance is left as it is (the scene behind still shows through T).
+                radiance += transmittance * source / sigma_t;
                 break;
             }
         }

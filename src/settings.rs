@@ -61,10 +61,31 @@ pub struct NoiseSettings {
     pub weather_extent: f32,
 }
 
-/// Wrenninge 2015 multiple-scattering octaves: octave i scatters `b^i` as much light, through
-/// an optical depth scaled by `a^i`, with phase eccentricity scaled by `c^i`.
+/// How the march estimates light scattered more than once.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum MultipleScatteringModel {
+    /// Single scattering only (the sun's light scattered once; ambient still added).
+    SingleOnly,
+    /// Wrenninge 2015 octaves (the `octaves`, `attenuation`, `contribution`, `eccentricity`
+    /// fields). Cheap, but cannot carry light deep into a cloud: thick media come out orders of
+    /// magnitude too dark against the path tracer (docs/fidelity.md).
+    Octaves,
+    /// The default: a delta-Eddington diffuse field (Joseph, Wiscombe & Weinman 1976) of the
+    /// local plane-parallel column (independent column approximation), from the optical depth
+    /// toward the sun and the optical depth below the sample, with the forward peak of the phase
+    /// folded into the direct beam. Carries light through thick clouds as the path tracer does
+    /// and answers albedo; the octave fields are ignored.
+    #[default]
+    DeltaEddington,
+}
+
+/// Multiple scattering: the model, and Wrenninge 2015's octave parameters (octave i scatters
+/// `b^i` as much light, through an optical depth scaled by `a^i`, with phase eccentricity scaled
+/// by `c^i`) for [`MultipleScatteringModel::Octaves`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MultipleScattering {
+    /// The model. Default [`MultipleScatteringModel::DeltaEddington`].
+    pub model: MultipleScatteringModel,
     /// Number of octaves N in [1, 8]; 1 = single scattering only. Default 4.
     pub octaves: u32,
     /// Attenuation a in (0, 1]. Default 0.5.
@@ -104,7 +125,9 @@ pub struct March {
     pub min_steps: u32,
     /// Rays end this far from the camera, in meters (> 0). Default 120 000.
     pub max_distance: f32,
-    /// The march stops once transmittance falls below this, in [0, 1). Default 0.01.
+    /// The march stops once transmittance falls below this, in [0, 1). Default 0.01. What the
+    /// rest of the ray would add is estimated as the last sample's medium continued without
+    /// end (T S / σt), so stopping early costs little light.
     pub transmittance_cutoff: f32,
     /// Blue-noise jitter of the ray start (against banding). Default true.
     pub jitter: bool,
@@ -358,6 +381,7 @@ impl Default for NoiseSettings {
 impl Default for MultipleScattering {
     fn default() -> Self {
         Self {
+            model: MultipleScatteringModel::default(),
             octaves: 4,
             attenuation: 0.5,
             contribution: 0.5,

@@ -5,7 +5,7 @@ use glam::{Mat4, Vec3, Vec4};
 use nimbus::demo::{standard_views, DemoView, Occluder};
 use nimbus::lighting::phase::PhaseModel;
 use nimbus::lighting::scattering::slab_single_scattering;
-use nimbus::settings::MultipleScattering;
+use nimbus::settings::{MultipleScattering, MultipleScatteringModel};
 use nimbus::{
     Camera, ColorTargets, DebugDensity, DepthConvention, Error, FrameInputs, Headless, NoiseVolume,
     Renderer, Settings, Sun, Targets,
@@ -392,7 +392,7 @@ fn slab_closed_form(radius: f32) {
     settings.weather.clouds.extinction = extinction;
     settings.weather.clouds.albedo = 1.0;
     settings.lighting.multiple_scattering = MultipleScattering {
-        octaves: 1,
+        model: MultipleScatteringModel::SingleOnly,
         ..Default::default()
     };
     settings.weather.ambient_top = Vec3::ZERO;
@@ -455,6 +455,150 @@ fn slab_closed_form(radius: f32) {
     }
     assert!(worst_l < 0.02, "radiance off by {:.2}%", worst_l * 100.0);
     assert!(worst_t < 0.005, "transmittance off by {worst_t}");
+}
+
+/// The march's multiple-scattering light (the default model less single scattering) through a
+/// τ = 5 slab seen from below, against the CPU mirror of the model (src/lighting/diffusion.rs)
+/// integrated finely along every pixel's ray: the shader computes what the tested CPU code does.
+#[test]
+fn delta_eddington_in_the_march_matches_its_cpu_mirror() {
+    use nimbus::lighting::diffusion::{delta_eddington_source, ColumnSample};
+    let (bottom, top, extinction, albedo) = (1_000.0f32, 1_500.0f32, 0.01f32, 0.999f32);
+    let mut settings = quiet(small_noise(1));
+    settings.debug_density = DebugDensity::Slab {
+        bottom_altitude: bottom,
+        top_altitude: top,
+        density: 1.0,
+    };
+    settings.weather.clouds.extinction = extinction;
+    settings.weather.clouds.albedo = albedo;
+    settings.weather.ambient_top = Vec3::ZERO;
+    settings.weather.ambient_bottom = Vec3::ZERO;
+    settings.lighting.light_distance = 100_000.0;
+    settings.haze.fade_distance = f32::INFINITY;
+    settings.march.min_steps = 256;
+    settings.march.max_steps = 256;
+    settings.march.transmittance_cutoff = 0.0;
+    let phase = settings.lighting.phase;
+    let eye = Vec3::new(0.0, 2.0, 0.0);
+    let view = Mat4::look_at_rh(eye, eye + Vec3::new(0.3, 0.8, 0.2), Vec3::Y);
+    let projection = Mat4::perspective_rh(40f32.to_radians(), W as f32 / H as f32, 1.0, 1e5);
+    let sun_dir = Vec3::new(-0.4, 0.6, 0.1).normalize();
+    let frame = FrameInputs {
+        camera: Camera {
+            view,
+            projection,
+            depth: DepthConvention::default(),
+        },
+        sun: Sun {
+            direction: sun_dir,
+            color: Vec3::ONE,
+            illuminance: 10.0,
+        },
+        time: 0.0,
+    };
+    let render = |model: MultipleScatteringModel| {
+        let mut s = settings.clone();
+        s.lighting.multiple_scattering.model = model;
+        let mut h = headless(s);
+        h.upload_scene(&vec![[0.0; 4]; (W * H) as usize], None)
+            .unwrap();
+        h.render(&frame).unwrap();
+        h.read_clouds().unwrap()
+    };
+    let all = render(MultipleScatteringModel::DeltaEddington);
+    let single = render(MultipleScatteringModel::SingleOnly);
+
+    let inv = (projection * view).inverse();
+    let g = phase.asymmetry();
+    let mut worst = 0.0f32;
+    for y in (0..H).step_by(7) {
+        for x in (0..W).step_by(7) {
+            let ndc_x = (x as f32 + 0.5) / W as f32 * 2.0 - 1.0;
+            let ndc_y = 1.0 - (y as f32 + 0.5) / H as f32 * 2.0;
+            let p = inv * Vec4::new(ndc_x, ndc_y, 0.0, 1.0);
+            let dir = (p.truncate() / p.w - eye).normalize();
+            let cos_theta = sun_dir.dot(dir);
+            let phase_value = phase.eval(cos_theta, 1.0);
+            // ∫ e^{-σt s} σs E ms(s) ds over the path inside the slab (flat-Earth heights: the
+            // curvature over these few km moves a height by centimetres).
+            let (enter, exit) = ((bottom - eye.y) / dir.y, (top - eye.y) / dir.y);
+            let n = 4000;
+            let ds = (exit - enter) / n as f32;
+            let mut l = 0.0f64;
+            for i in 0..n {
+                let s = (i as f32 + 0.5) * ds;
+                let h = eye.y + (enter + s) * dir.y;
+                let column = ColumnSample {
+                    tau_sun: extinction * (top - h) / sun_dir.y,
+                    tau_below: extinction * (h - bottom),
+                    mu0: sun_dir.y.max(0.3),
+                    mu_view: dir.y,
+                    cos_theta,
+                };
+                let ms = delta_eddington_source(&column, albedo, g, phase_value);
+                l += ((-extinction * s).exp() * albedo * extinction * 10.0 * ms * ds) as f64;
+            }
+            let i = (y * W + x) as usize;
+            let got = all[i][0] - single[i][0];
+            let err = (got - l as f32).abs() / l as f32;
+            worst = worst.max(err);
+        }
+    }
+    println!(
+        "multiple scattering, march vs CPU mirror: worst {:.2}%",
+        worst * 100.0
+    );
+    assert!(worst < 0.02, "off by {:.2}%", worst * 100.0);
+}
+
+/// Stopping at the transmittance cutoff adds an estimate of the rest of the ray, so a thick
+/// slab seen from below loses almost nothing to an early exit at T = 0.05 (dropping the rest
+/// would lose about 5%: the light the remaining weight gathers).
+#[test]
+fn an_early_exit_estimates_the_rest_of_the_ray() {
+    let mut settings = quiet(small_noise(1));
+    settings.debug_density = DebugDensity::Slab {
+        bottom_altitude: 1_000.0,
+        top_altitude: 1_500.0,
+        density: 1.0,
+    };
+    settings.weather.clouds.extinction = 0.04;
+    settings.weather.ambient_top = Vec3::ZERO;
+    settings.weather.ambient_bottom = Vec3::ZERO;
+    settings.haze.fade_distance = f32::INFINITY;
+    settings.march.min_steps = 128;
+    settings.march.max_steps = 128;
+    let eye = Vec3::new(0.0, 2.0, 0.0);
+    let frame = FrameInputs {
+        camera: Camera {
+            view: Mat4::look_at_rh(eye, eye + Vec3::new(0.2, 0.9, 0.1), Vec3::Y),
+            projection: Mat4::perspective_rh(30f32.to_radians(), W as f32 / H as f32, 1.0, 1e5),
+            depth: DepthConvention::default(),
+        },
+        sun: Sun {
+            direction: Vec3::new(0.3, 0.85, 0.2).normalize(),
+            color: Vec3::ONE,
+            illuminance: 10.0,
+        },
+        time: 0.0,
+    };
+    let mean = |cutoff: f32| {
+        let mut s = settings.clone();
+        s.march.transmittance_cutoff = cutoff;
+        let mut h = headless(s);
+        h.upload_scene(&vec![[0.0; 4]; (W * H) as usize], None)
+            .unwrap();
+        h.render(&frame).unwrap();
+        let img = h.read_clouds().unwrap();
+        img.iter().map(|p| p[0] as f64).sum::<f64>() / img.len() as f64
+    };
+    let (full, early) = (mean(0.0), mean(0.05));
+    println!(
+        "τ 20 slab, early exit at T 0.05 / no exit: {:.4}",
+        early / full
+    );
+    assert!((early / full - 1.0).abs() < 0.015, "{}", early / full);
 }
 
 #[test]

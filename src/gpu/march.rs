@@ -9,7 +9,7 @@ use super::compute::{frame_pipeline, params_entry, storage_entry, texture_entry,
 use super::noise::NoiseTextures;
 use super::shaders::DepthKind;
 use crate::frame::{CameraDerived, FrameInputs};
-use crate::settings::{DebugDensity, Settings};
+use crate::settings::{DebugDensity, MultipleScatteringModel, Settings};
 use crate::weather::WeatherSample;
 
 /// Layout must match `MarchUniforms` in shaders/medium.wgsl field for field.
@@ -45,6 +45,8 @@ pub(crate) struct MarchUniforms {
     pattern: [f32; 4],
     opts: [f32; 4],
     viewport: [f32; 4],
+    /// Multiple-scattering model (0 single, 1 octaves, 2 delta-Eddington), phase asymmetry g.
+    ms_model: [f32; 4],
 }
 
 /// Two horizontal axes perpendicular to `up` (X and Z for +Y up).
@@ -142,8 +144,13 @@ impl MarchUniforms {
             phase: phase_params,
             ms: {
                 let m = &s.lighting.multiple_scattering;
+                // Only the octave model has more than the first (single-scattering) octave.
+                let octaves = match m.model {
+                    MultipleScatteringModel::Octaves => m.octaves,
+                    _ => 1,
+                };
                 [
-                    m.octaves as f32,
+                    octaves as f32,
                     m.attenuation,
                     m.contribution,
                     m.eccentricity,
@@ -194,6 +201,18 @@ impl MarchUniforms {
             ],
             // Set per frame from the targets (set_viewport).
             viewport: [0.0; 4],
+            ms_model: [
+                match s.lighting.multiple_scattering.model {
+                    MultipleScatteringModel::SingleOnly => 0.0,
+                    MultipleScatteringModel::Octaves => 1.0,
+                    MultipleScatteringModel::DeltaEddington => 2.0,
+                },
+                // |g| < 0.98 keeps the delta scaling's 1 - g² away from 0 (a dual-lobe HG may
+                // reach 0.999; no cloud phase comes near).
+                s.lighting.phase.asymmetry().clamp(-0.98, 0.98),
+                0.0,
+                0.0,
+            ],
         }
     }
 }
@@ -388,12 +407,12 @@ mod tests {
 
     #[test]
     fn uniforms_match_the_wgsl_struct_size() {
-        // 1 mat4 + 28 vec4 in shaders/medium.wgsl.
-        assert_eq!(std::mem::size_of::<MarchUniforms>(), 64 + 28 * 16);
+        // 1 mat4 + 29 vec4 in shaders/medium.wgsl.
+        assert_eq!(std::mem::size_of::<MarchUniforms>(), 64 + 29 * 16);
         let src = pass_source("march", DepthKind::Depth);
         let start = src.find("struct MarchUniforms").unwrap();
         let body = &src[start..start + src[start..].find('}').unwrap()];
-        assert_eq!(body.matches(": vec4f").count(), 28);
+        assert_eq!(body.matches(": vec4f").count(), 29);
         assert_eq!(body.matches(": mat4x4f").count(), 1);
     }
 

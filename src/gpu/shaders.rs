@@ -27,6 +27,7 @@ pub(crate) const WEATHER_BAKE: (&str, &str) = shader!("weather_bake.wgsl");
 pub(crate) const WEATHER_BLEND: (&str, &str) = shader!("weather_blend.wgsl");
 pub(crate) const MIP_DOWNSAMPLE: (&str, &str) = shader!("mip_downsample.wgsl");
 pub(crate) const MEDIUM: (&str, &str) = shader!("medium.wgsl");
+pub(crate) const DIFFUSION: (&str, &str) = shader!("diffusion.wgsl");
 pub(crate) const MARCH: (&str, &str) = shader!("march.wgsl");
 pub(crate) const PATH_TRACE: (&str, &str) = shader!("path_trace.wgsl");
 pub(crate) const TEMPORAL: (&str, &str) = shader!("temporal.wgsl");
@@ -41,7 +42,9 @@ pub(crate) const PASSES: &[(&str, &[(&str, &str)])] = &[
     ("mip_downsample", &[MIP_DOWNSAMPLE]),
     (
         "march",
-        &[COMMON, DEPTH, ATMOSPHERE, PHASE, DENSITY, MEDIUM, MARCH],
+        &[
+            COMMON, DEPTH, ATMOSPHERE, PHASE, DENSITY, MEDIUM, DIFFUSION, MARCH,
+        ],
     ),
     (
         "path_trace",

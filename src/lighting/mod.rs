@@ -2,5 +2,6 @@
 //! Wrenninge's multiple-scattering octaves. The WGSL in `shaders/phase.wgsl` and
 //! `shaders/march.wgsl` mirrors these functions; the tests here are the oracle for both.
 
+pub mod diffusion;
 pub mod phase;
 pub mod scattering;

@@ -112,6 +112,28 @@ impl PhaseModel {
         }
     }
 
+    /// The asymmetry parameter g = ⟨cos θ⟩ (the phase's first Legendre moment), which is what
+    /// a P1 (Eddington) diffuse field sees of the phase. HG's is its g; Draine 2003's is
+    /// g (1 + α (3 + 2g²) / 5) / (1 + α (1 + 2g²) / 3).
+    pub fn asymmetry(&self) -> f32 {
+        let draine_g = |g: f32, a: f32| {
+            g * (1.0 + a * (3.0 + 2.0 * g * g) / 5.0) / (1.0 + a * (1.0 + 2.0 * g * g) / 3.0)
+        };
+        match *self {
+            PhaseModel::JendersieDEon {
+                droplet_diameter_um,
+            } => {
+                let p = jendersie_deon_params(droplet_diameter_um);
+                (1.0 - p.w_d) * p.g_hg + p.w_d * draine_g(p.g_d, p.alpha)
+            }
+            PhaseModel::DualLobeHg {
+                g_forward,
+                g_backward,
+                forward_weight,
+            } => forward_weight * g_forward + (1.0 - forward_weight) * g_backward,
+        }
+    }
+
     /// Refuses parameters outside the model's domain.
     pub fn validate(&self) -> Result<()> {
         match *self {
@@ -283,5 +305,38 @@ mod tests {
         }
         .validate()
         .is_err());
+    }
+
+    #[test]
+    fn asymmetry_is_the_mean_cosine() {
+        for model in [
+            PhaseModel::default(),
+            PhaseModel::JendersieDEon {
+                droplet_diameter_um: 30.0,
+            },
+            PhaseModel::DualLobeHg {
+                g_forward: 0.8,
+                g_backward: -0.3,
+                forward_weight: 0.7,
+            },
+        ] {
+            // ∫ p(μ) μ 2π dμ by the midpoint rule in u = ln(1 + ε - μ), which crowds the
+            // points into the forward peak.
+            let eps = 1e-7f64;
+            let (u0, u1) = ((2.0 + eps).ln(), eps.ln());
+            let n = 400_000;
+            let mut mean = 0.0f64;
+            for i in 0..n {
+                let u = u0 + (u1 - u0) * (i as f64 + 0.5) / n as f64;
+                let mu = 1.0 + eps - u.exp();
+                let dmu = u.exp() * (u0 - u1) / n as f64;
+                mean += model.eval(mu as f32, 1.0) as f64 * mu * 2.0 * std::f64::consts::PI * dmu;
+            }
+            let g = model.asymmetry() as f64;
+            assert!(
+                (mean - g).abs() < 2e-3,
+                "{model:?}: quadrature {mean}, formula {g}"
+            );
+        }
     }
 }

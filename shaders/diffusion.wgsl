@@ -1,0 +1,64 @@
+// The delta-Eddington diffuse field of a homogeneous plane-parallel column (Joseph, Wiscombe &
+// Weinman 1976): the march's multiple-scattering model. Mirrors src/lighting/diffusion.rs line
+// by line (the derivation and the tests are there).
+
+const DE_MAX_ALBEDO: f32 = 0.999999;
+// The least sun cosine a column is lit at (about 17°; see march.wgsl).
+const DE_MIN_MU0: f32 = 0.3;
+
+// (I0, I1) per unit sun irradiance at optical depth a below the top of a column of optical depth
+// a + b, sun at cosine mu0, single-scattering albedo w, phase asymmetry g.
+fn delta_eddington(a: f32, b: f32, mu0: f32, albedo: f32, g: f32) -> vec2f {
+    // The forward peak folded into the beam: f = g² for a forward phase, none for a backward one.
+    let f = max(g, 0.0) * max(g, 0.0);
+    let w = clamp(albedo, 0.0, DE_MAX_ALBEDO);
+    let scale = 1.0 - w * f;
+    let ws = w * (1.0 - f) / scale;
+    let gs = (g - f) / (1.0 - f);
+    let ta = a * scale;
+    let tt = (a + b) * scale;
+    let k = sqrt(3.0 * (1.0 - ws) * (1.0 - ws * gs));
+    let p = k / (1.0 - ws * gs);
+    // The particular solution is singular at k mu0 = 1: step mu0 off it.
+    var m0 = max(mu0, 1e-3);
+    if (abs(1.0 - k * k * m0 * m0) < 1e-3) {
+        m0 *= 1.002;
+    }
+    let den = 1.0 - k * k * m0 * m0;
+    let s = 3.0 * ws / (4.0 * PI);
+    let alpha = -m0 * m0 * s * (1.0 + gs * (1.0 - ws)) / den;
+    let beta = m0 * (3.0 * (1.0 - ws) * alpha - s);
+    let e_bottom = exp(-tt / m0);
+    let e_k = exp(-k * tt);
+    let ca = 1.0 + 2.0 * p / 3.0;
+    let cb = 1.0 - 2.0 * p / 3.0;
+    let r_top = -(alpha + 2.0 * beta / 3.0);
+    let r_bottom = -(alpha - 2.0 * beta / 3.0) * e_bottom;
+    let det = ca * ca - cb * cb * e_k * e_k;
+    let c1 = (r_top * ca - r_bottom * cb * e_k) / det;
+    let c2 = (r_bottom * ca - r_top * cb * e_k) / det;
+    let ea = exp(-k * ta);
+    let eb = exp(-k * (tt - ta));
+    let ed = exp(-ta / m0);
+    return vec2f(c1 * ea + c2 * eb + alpha * ed, p * (c1 * ea - c2 * eb) + beta * ed);
+}
+
+// The multiple-scattering part of the source per unit sun irradiance (see
+// delta_eddington_source in src/lighting/diffusion.rs for why each term): the forward-scattered
+// light the delta scaling keeps in the beam, p (e^{-(1-wg²)tau} - e^{-tau}); the diffuse field
+// seen through the phase, I0 + g mu I1 in a thick column (mu: the light's direction toward the
+// camera against the downward vertical), the same energy in an HG lobe of asymmetry g g'
+// around the sun in a thin one, blended by 1 - e^{-tau*'}.
+fn delta_eddington_source(tau_sun: f32, tau_below: f32, mu0: f32, mu_view: f32, cos_theta: f32, albedo: f32, g: f32, phase: f32) -> f32 {
+    let w = clamp(albedo, 0.0, DE_MAX_ALBEDO);
+    let m0 = max(mu0, 1e-3);
+    let a = tau_sun * m0;
+    let i = delta_eddington(a, tau_below, m0, w, g);
+    let f = max(g, 0.0) * max(g, 0.0);
+    let peak = phase * (exp(-(1.0 - w * f) * tau_sun) - exp(-tau_sun));
+    let p1 = i.x + g * mu_view * i.y;
+    let ge = g * (g - f) / (1.0 - f);
+    let lobe = 4.0 * PI * i.x * henyey_greenstein(cos_theta, ge);
+    let thick = 1.0 - exp(-(a + tau_below) * (1.0 - w * f));
+    return max(peak + mix(lobe, p1, thick), 0.0);
+}
