@@ -1,7 +1,8 @@
 //! Weather tour, without a window: a contact sheet of every preset (one PNG: a row per preset,
 //! from the ground looking up and from 8 km looking down) and an interrupted transition
-//! (cloudy to stormy, interrupted half way by clear) as numbered PNGs. Prints, for every
-//! frame, the largest per-pixel change from the previous frame.
+//! (cloudy to stormy, interrupted half way by clear) as numbered PNGs, one a second of a
+//! 16 fps run. Prints, for every saved frame, the largest per-pixel change from the previous
+//! saved one.
 //!
 //! Usage: cargo run --release --example weather_tour -- OUT_DIR [--size WIDTHxHEIGHT]
 
@@ -15,6 +16,10 @@ use nimbus::{Headless, Settings};
 
 type Image = Vec<[f32; 4]>;
 
+/// Frames each contact-sheet view gets: enough for the default temporal pattern (a 4 × 4 block)
+/// to trace every pixel several times.
+const SETTLE_FRAMES: u32 = 48;
+
 /// The ground view of the standard set, and a view from 12 km, above every preset's tops.
 fn view(which: usize) -> DemoView {
     let mut v = standard_views()[if which == 0 { 0 } else { 3 }];
@@ -25,13 +30,23 @@ fn view(which: usize) -> DemoView {
     v
 }
 
-fn render(h: &mut Headless, which: usize, size: (u32, u32), time: f64) -> Result<Image, String> {
+/// One view at `time`, after `frames` frames of it (the temporal pattern traces a pixel of each
+/// block per frame: the contact sheet shows the settled picture, as a still camera sees it).
+fn render(
+    h: &mut Headless,
+    which: usize,
+    size: (u32, u32),
+    time: f64,
+    frames: u32,
+) -> Result<Image, String> {
     let v = view(which);
     let scene = v.scene(size.0, size.1);
     h.upload_scene(&scene.color, Some(&scene.depth))
         .map_err(|e| e.to_string())?;
-    h.render(&v.frame(size.0, size.1, time))
-        .map_err(|e| e.to_string())?;
+    for _ in 0..frames.max(1) {
+        h.render(&v.frame(size.0, size.1, time))
+            .map_err(|e| e.to_string())?;
+    }
     h.read_output().map_err(|e| e.to_string())
 }
 
@@ -103,7 +118,8 @@ fn run() -> Result<(), String> {
             .set_weather(w.clone(), t, 0.0)
             .map_err(|e| e.to_string())?;
         for which in [0, 1] {
-            images.push(render(&mut h, which, size, t)?);
+            h.renderer_mut().reset_history();
+            images.push(render(&mut h, which, size, t, SETTLE_FRAMES)?);
         }
         let label = if w.high_layer.coverage > 0.0 {
             format!("{} + cirrus", w.name)
@@ -132,6 +148,17 @@ fn run() -> Result<(), String> {
     let mut prev: Option<Image> = None;
     for k in 0..=30 {
         let t = k as f64;
+        // The second before this frame at 16 frames a second, as a game would run it, so the
+        // temporal history has followed the weather (one frame a second would show the
+        // freshly traced pixels as a grid against a second-old history).
+        if k > 0 {
+            let v = view(0);
+            for j in 1..16 {
+                let tj = t - 1.0 + j as f64 / 16.0;
+                h.render(&v.frame(size.0, size.1, tj))
+                    .map_err(|e| e.to_string())?;
+            }
+        }
         let note = if k == 10 {
             h.renderer_mut()
                 .set_weather(Weather::clear(), t, 20.0)
@@ -140,7 +167,7 @@ fn run() -> Result<(), String> {
         } else {
             ""
         };
-        let img = render(&mut h, 0, size, t)?;
+        let img = render(&mut h, 0, size, t, 1)?;
         let path = out.join(format!("transition_{k:03}.png"));
         write_png(&path, &img, size.0, size.1, 1.0).map_err(|e| e.to_string())?;
         let change = prev.as_ref().map(|p| max_change(p, &img));

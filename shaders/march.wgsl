@@ -107,14 +107,19 @@ fn sun_optical_depth(p: vec3f, n: u32, footprint: f32) -> f32 {
 // Optical depth straight down from p (density sigma_t there) to the bottom of the medium,
 // for the independent-column diffuse model: exact for the debug slab and sphere; for the noise
 // model the column below is taken as dense as the sample, down to the layer's base.
-fn column_below(p: vec3f, local_up: vec3f, sigma_t: f32) -> f32 {
+fn column_below(p: vec3f, local_up: vec3f, sigma_t: f32, body_density: f32) -> f32 {
     let mode = debug_mode();
     if (mode == DEBUG_SPHERE) {
         let s = ball_segment(p, -local_up, u.debug_sphere.xyz, u.debug_sphere.w, 1e9);
         return select(0.0, s.a.y, s.count > 0u) * sigma_t;
     }
-    let base = select(u.layer.x, u.debug.x, mode == DEBUG_SLAB);
-    return max(altitude(p, u.planet.xyz, u.planet.w) - base, 0.0) * sigma_t;
+    if (mode == DEBUG_SLAB) {
+        return max(altitude(p, u.planet.xyz, u.planet.w) - u.debug.x, 0.0) * sigma_t;
+    }
+    // The noise model: the column below is as dense as the cloud's body here (the base shape,
+    // which the detail erosion thins only at the edges).
+    let body = max(sigma_t, body_density * u.shape.z);
+    return max(altitude(p, u.planet.xyz, u.planet.w) - u.layer.x, 0.0) * body;
 }
 
 @compute @workgroup_size(8, 8, 1)
@@ -230,6 +235,8 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
             }
             i += 1u;
             let density = sample_density(p, false, footprint);
+            // Before the light march's samples overwrite it.
+            let body_density = last_base_density;
             if (density <= 0.0) {
                 empty_run += 1u;
                 if (coarse_on && empty_run >= FINE_EMPTY) {
@@ -260,7 +267,7 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
                 let local_up = normalize(p + up * radius);
                 let mu0 = max(dot(u.sun.xyz, local_up), DE_MIN_MU0);
                 let mu_view = dot(dir, local_up);
-                let column = column_below(p, local_up, sigma_t);
+                let column = column_below(p, local_up, sigma_t, body_density);
                 // Looking up, the view ray's own optical depth since it entered the cloud,
                 // projected on the vertical, is the column below as the ray measured it. Blended
                 // in over the first 15° above the horizon (no seam at the horizon).
