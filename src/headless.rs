@@ -414,6 +414,24 @@ impl Headless {
         })
     }
 
+    /// The cloud shadow map's texels (r front depth, g mean extinction, b optical depth,
+    /// a transmittance), row-major, as the last frame of the default view left them (see
+    /// [`Renderer::cloud_shadows`] for the matrix).
+    pub fn read_cloud_shadows(&self) -> Result<Vec<[f32; 4]>> {
+        let map = self.renderer.cloud_shadows().ok_or_else(|| {
+            invalid_target(
+                "output",
+                "no cloud shadow map: enable settings.shadows and render a frame first",
+            )
+        })?;
+        Ok(from_f16(&read_texture(
+            &self.device,
+            &self.queue,
+            map.texture,
+            0,
+        )?))
+    }
+
     /// One mip level of a baked noise volume, RGBA8, x fastest then y then z.
     pub fn read_noise(&self, which: NoiseVolume, mip: u32) -> Result<Vec<u8>> {
         let texture = self.renderer.noise_volume(which);

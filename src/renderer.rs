@@ -13,6 +13,7 @@ use crate::gpu::composite::{CompositeCache, CompositeInputs, CompositeUniforms};
 use crate::gpu::march::{MarchPipeline, MarchUniforms};
 use crate::gpu::noise::{NoiseTextures, NoiseVolume};
 use crate::gpu::shaders::DepthKind;
+use crate::gpu::shadow::{ShadowFrame, ShadowPass};
 use crate::gpu::temporal::{ResolveFrame, TemporalPipeline, TemporalUniforms};
 use crate::gpu::timing::{GpuTimer, PassTimes};
 use crate::gpu::weather::WeatherMaps;
@@ -108,6 +109,34 @@ pub struct Renderer {
     /// The view `encode_view` recorded last (for the pass times and readback helpers).
     last_view: ViewId,
     timer: Option<GpuTimer>,
+    /// The cloud shadow map, when `settings.shadows.enabled`.
+    shadow: Option<ShadowPass>,
+}
+
+/// The cloud shadow map as the last frame of the default view left it: the texture, its
+/// world → map matrix and what it was built for. See docs/cloud-shadows.md.
+#[derive(Clone, Copy, Debug)]
+pub struct CloudShadowMap<'a> {
+    /// `resolution`² texels of `Rgba16Float`: r front depth (m), g mean extinction (1/m),
+    /// b total optical depth, a exp(−b). The texture is toroidal: sample with repeat
+    /// addressing (bilinear filtering is fine).
+    pub texture: &'a wgpu::Texture,
+    /// A view of `texture` for binding.
+    pub view: &'a wgpu::TextureView,
+    /// World position → (x, y texture coordinates, z depth along the light in meters, 1). A
+    /// point at depth z under a texel t sees the sun through exp(−min(t.g · max(z − t.r, 0),
+    /// t.b)); see [`crate::shadow_optical_depth`].
+    pub world_to_map: glam::Mat4,
+    /// The sun direction the map was built for (it follows the frame's sun to within 0.1°).
+    pub sun: glam::Vec3,
+    /// The map coordinates of the square's first texel corner: a world point lies inside the
+    /// square (where the map is valid) iff `world_to_map`'s x and y minus these are both in
+    /// [0, 1). Outside, the repeat addressing returns texels of the square's other side.
+    pub window_origin: glam::Vec2,
+    /// Texels along a side.
+    pub resolution: u32,
+    /// Side of the square (m).
+    pub extent: f32,
 }
 
 /// Which subresource of each target the views show, for callers that make their own views
@@ -303,6 +332,10 @@ impl Renderer {
                 wgpu::TextureUsages::TEXTURE_BINDING,
             )
             .create_view(&Default::default());
+            let shadow = settings
+                .shadows
+                .enabled
+                .then(|| ShadowPass::new(device, settings.shadows));
             Self {
                 device: device.clone(),
                 queue: queue.clone(),
@@ -317,6 +350,7 @@ impl Renderer {
                 views: Views::new(device),
                 last_view: ViewId::DEFAULT,
                 timer: None,
+                shadow,
             }
         })
     }
@@ -350,14 +384,29 @@ impl Renderer {
         );
         let map_changed =
             settings.weather != self.settings.weather || new.weather_size != old.weather_size;
-        let (noise, maps) = gpu_scope(&device, || {
+        let shadow_settings = settings.shadows;
+        let new_shadow = shadow_settings.enabled
+            && !self
+                .shadow
+                .as_ref()
+                .is_some_and(|p| p.fits(&shadow_settings));
+        let (noise, maps, shadow) = gpu_scope(&device, || {
             let noise = bake_changed.then(|| NoiseTextures::new(&device, &queue, new));
             let maps = map_changed.then(|| {
                 self.weather_maps
                     .rebuilt(&device, &queue, new.weather_size, &settings.weather)
             });
-            (noise, maps)
+            let shadow = new_shadow.then(|| ShadowPass::new(&device, shadow_settings));
+            (noise, maps, shadow)
         })?;
+        if !shadow_settings.enabled {
+            self.shadow = None;
+        } else if let Some(pass) = shadow {
+            self.shadow = Some(pass);
+        } else if let Some(pass) = &mut self.shadow {
+            // Any setting may change what the map holds (the medium, the steps).
+            pass.retune(shadow_settings);
+        }
         if let Some(noise) = noise {
             self.noise = noise;
         }
@@ -431,6 +480,12 @@ impl Renderer {
         // Only now, with the GPU work accepted, do the maps and the timeline move together.
         self.weather_maps.commit(slots);
         self.timeline = timeline;
+        if duration == 0.0 {
+            // An instant change: the map must not show the old weather for a few frames.
+            if let Some(pass) = &mut self.shadow {
+                pass.plan.invalidate();
+            }
+        }
         Ok(())
     }
 
@@ -553,6 +608,25 @@ impl Renderer {
                 .write_buffer(&state.uniforms, 0, bytemuck::bytes_of(&uniforms));
             self.queue
                 .write_buffer(&state.composite_uniforms, 0, bytemuck::bytes_of(&composite));
+            if view == ViewId::DEFAULT {
+                if let Some(pass) = &mut self.shadow {
+                    let frame = ShadowFrame {
+                        camera: pending.camera,
+                        sun: uniforms.sun_dir(),
+                        medium_top: uniforms.medium_top(),
+                    };
+                    pass.record(
+                        &device,
+                        &self.queue,
+                        encoder,
+                        &state.uniforms,
+                        &self.noise,
+                        self.weather_maps.views(),
+                        &frame,
+                        self.timer.as_ref(),
+                    );
+                }
+            }
             let (march, resolve) = self.passes.for_depth(checked.depth_kind);
             let scene_depth = targets.depth.unwrap_or(&self.no_depth);
             let fresh = &sized.fresh;
@@ -698,9 +772,32 @@ impl Renderer {
         Ok(self.views.get(view)?.memory_bytes(texture_bytes))
     }
 
-    /// Bytes of GPU memory all views share (noise volumes, weather maps, blue noise).
+    /// Bytes of GPU memory all views share (noise volumes, weather maps, blue noise, the
+    /// cloud shadow map).
     pub fn shared_memory_bytes(&self) -> u64 {
-        self.noise.memory_bytes(texture_bytes) + self.weather_maps.memory_bytes(texture_bytes)
+        self.noise.memory_bytes(texture_bytes)
+            + self.weather_maps.memory_bytes(texture_bytes)
+            + self
+                .shadow
+                .as_ref()
+                .map_or(0, |p| texture_bytes(&p.texture))
+    }
+
+    /// The cloud shadow map, once a frame of the default view has been encoded with
+    /// `settings.shadows.enabled`; `None` otherwise. The map follows the default view's
+    /// camera and is updated in that view's `encode` (before the march, in the same encoder):
+    /// bind it in passes recorded after that encode.
+    pub fn cloud_shadows(&self) -> Option<CloudShadowMap<'_>> {
+        let pass = self.shadow.as_ref()?;
+        Some(CloudShadowMap {
+            texture: &pass.texture,
+            view: &pass.view,
+            world_to_map: pass.world_to_map?,
+            sun: pass.sun,
+            window_origin: pass.window_origin,
+            resolution: self.settings.shadows.resolution,
+            extent: self.settings.shadows.extent,
+        })
     }
 
     /// Number of composite pipelines built so far (one per output format and mode).
@@ -712,7 +809,9 @@ impl Renderer {
     /// textures change (first frame of a view, resize, settings or weather change, other host
     /// views), never per frame: a frame loop that keeps its views keeps this number still.
     pub fn bind_groups_created(&self) -> u64 {
-        self.passes.bind_groups_created() + self.composite.bind_groups_created()
+        self.passes.bind_groups_created()
+            + self.composite.bind_groups_created()
+            + self.shadow.as_ref().map_or(0, |p| p.bind_groups_created())
     }
 
     /// Drops the cached bind groups that hold the host's target views (scene depth, scene
@@ -725,6 +824,9 @@ impl Renderer {
     fn clear_bind_groups(&mut self) {
         self.passes.clear_bind_groups();
         self.composite.clear_bind_groups();
+        if let Some(pass) = &mut self.shadow {
+            pass.clear_bind_groups();
+        }
     }
 
     fn forget_view_binds(&mut self, state: &ViewState) {

@@ -28,6 +28,41 @@ pub struct Settings {
     pub haze: Haze,
     /// Replaces the noise model by an analytic medium (for checking the integrator).
     pub debug_density: DebugDensity,
+    /// The cloud shadow map handed to the host (off by default).
+    pub shadows: CloudShadows,
+}
+
+/// The cloud shadow map: the clouds' optical depth toward the sun over a square around the
+/// default view's camera, for the host to darken its ground and objects. See
+/// docs/cloud-shadows.md for what a texel holds and how to sample it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CloudShadows {
+    /// Make and update the map. Default false (it costs a march per texel, amortised).
+    pub enabled: bool,
+    /// Side of the square (m), centered on the camera, in [1 km, 1000 km]. Default 40 km.
+    pub extent: f32,
+    /// Texels along each side, a power of two in [16, 2048]. Default 256 (156 m texels).
+    pub resolution: u32,
+    /// Density samples along each texel's ray through the medium, in [4, 256]. Default 32.
+    pub steps: u32,
+    /// Spread the refresh over this many frames (one slice of rows per frame), in [1, 16]:
+    /// the map then costs 1/slices of a full update per frame and follows the wind and
+    /// weather with that many frames' lag. Texels the camera's motion brings into the
+    /// square, a sun that turned by more than 0.1°, and a settings change are updated at once.
+    /// Default 4.
+    pub update_slices: u32,
+}
+
+impl Default for CloudShadows {
+    fn default() -> Self {
+        Self {
+            enabled: false,
+            extent: 40_000.0,
+            resolution: 256,
+            steps: 32,
+            update_slices: 4,
+        }
+    }
 }
 
 /// The planet: a sphere whose surface passes through the world origin.
@@ -440,6 +475,7 @@ impl Default for Settings {
             march: March::default(),
             haze: Haze::default(),
             debug_density: DebugDensity::Off,
+            shadows: CloudShadows::default(),
         }
     }
 }
@@ -607,6 +643,11 @@ impl Settings {
                 non_negative("debug_density.density", density)?;
             }
         }
+        let sh = &self.shadows;
+        in_range("shadows.extent", sh.extent, 1_000.0, 1_000_000.0)?;
+        pow2("shadows.resolution", sh.resolution, 16, 2048)?;
+        count("shadows.steps", sh.steps, 4, 256)?;
+        count("shadows.update_slices", sh.update_slices, 1, 16)?;
         Ok(())
     }
 }
@@ -626,6 +667,24 @@ mod tests {
     #[test]
     fn defaults_are_valid() {
         Settings::default().validate().unwrap();
+    }
+
+    #[test]
+    fn shadow_map_ranges_are_checked() {
+        type Break = fn(&mut CloudShadows);
+        let cases: [(&str, Break); 5] = [
+            ("shadows.extent", |c| c.extent = f32::NAN),
+            ("shadows.extent", |c| c.extent = 10.0),
+            ("shadows.resolution", |c| c.resolution = 300),
+            ("shadows.steps", |c| c.steps = 0),
+            ("shadows.update_slices", |c| c.update_slices = 17),
+        ];
+        for (field, break_it) in cases {
+            let mut s = Settings::default();
+            s.shadows.enabled = true;
+            break_it(&mut s.shadows);
+            assert_eq!(refused(&s), field);
+        }
     }
 
     #[test]

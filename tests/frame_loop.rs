@@ -60,6 +60,12 @@ fn frames_create_no_gpu_objects() {
     let scene = nimbus::demo::standard_views()[0].scene(common::W, common::H);
     h.upload_scene(&scene.color, Some(&scene.depth)).unwrap();
     assert_frames_create_nothing(&mut h, "with scene depth");
+    // The cloud shadow map: made with the settings, then updated every frame in place.
+    let mut s = small_noise(3);
+    s.shadows.enabled = true;
+    s.shadows.resolution = 64;
+    h.renderer_mut().set_settings(s).unwrap();
+    assert_frames_create_nothing(&mut h, "with the cloud shadow map");
 }
 
 #[test]

@@ -226,6 +226,24 @@ fn flag(on: bool) -> f32 {
 }
 
 impl MarchUniforms {
+    /// The direction toward the sun.
+    pub(crate) fn sun_dir(&self) -> Vec3 {
+        Vec3::from_slice(&self.sun[..3])
+    }
+
+    /// The highest altitude (m) the medium reaches: the layer's top, or the debug medium's.
+    pub(crate) fn medium_top(&self) -> f32 {
+        let (up, radius) = (Vec3::from_slice(&self.planet[..3]), self.planet[3]);
+        match self.misc[2] as u32 {
+            1 => self.debug[1],
+            2 => {
+                let center = Vec3::from_slice(&self.debug_sphere[..3]);
+                (center + up * radius).length() - radius + self.debug_sphere[3]
+            }
+            _ => self.layer[1],
+        }
+    }
+
     /// Whether the march clips rays at the scene depth (known only once targets are given).
     pub(crate) fn set_has_depth(&mut self, has_depth: bool) {
         self.misc[3] = flag(has_depth);

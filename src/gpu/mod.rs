@@ -9,6 +9,7 @@ pub(crate) mod march;
 pub mod noise;
 pub(crate) mod readback;
 pub(crate) mod shaders;
+pub(crate) mod shadow;
 pub(crate) mod temporal;
 pub mod timing;
 pub(crate) mod weather;

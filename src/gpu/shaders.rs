@@ -29,6 +29,7 @@ pub(crate) const MIP_DOWNSAMPLE: (&str, &str) = shader!("mip_downsample.wgsl");
 pub(crate) const MEDIUM: (&str, &str) = shader!("medium.wgsl");
 pub(crate) const DIFFUSION: (&str, &str) = shader!("diffusion.wgsl");
 pub(crate) const MARCH: (&str, &str) = shader!("march.wgsl");
+pub(crate) const SHADOW: (&str, &str) = shader!("shadow.wgsl");
 pub(crate) const PATH_TRACE: (&str, &str) = shader!("path_trace.wgsl");
 pub(crate) const TEMPORAL: (&str, &str) = shader!("temporal.wgsl");
 pub(crate) const COMPOSITE: (&str, &str) = shader!("composite.wgsl");
@@ -46,6 +47,7 @@ pub(crate) const PASSES: &[(&str, &[(&str, &str)])] = &[
             COMMON, DEPTH, ATMOSPHERE, PHASE, DENSITY, MEDIUM, DIFFUSION, MARCH,
         ],
     ),
+    ("shadow", &[COMMON, ATMOSPHERE, DENSITY, MEDIUM, SHADOW]),
     (
         "path_trace",
         &[

@@ -1,4 +1,4 @@
-//! GPU time of the march, temporal resolve and composite passes from timestamp queries (benchmarks only; never
+//! GPU time of the march, temporal resolve, composite and cloud-shadow passes from timestamp queries (benchmarks only; never
 //! in pass/fail tests). Lavapipe has timestamps, but cross-check them with wall time.
 
 use crate::error::Result;
@@ -12,6 +12,9 @@ pub struct PassTimes {
     pub resolve_ms: f64,
     /// The composite (upsample + blend) render pass.
     pub composite_ms: f64,
+    /// The cloud shadow map's update (0 with the map off, or in frames of views other than
+    /// the default one, which the map does not follow).
+    pub shadow_ms: f64,
 }
 
 pub(crate) struct GpuTimer {
@@ -27,9 +30,10 @@ pub(crate) enum Pass {
     March = 0,
     Resolve = 1,
     Composite = 2,
+    Shadow = 3,
 }
 
-const QUERIES: u32 = 6;
+const QUERIES: u32 = 8;
 
 impl GpuTimer {
     /// A timer, or `None` when the device lacks `TIMESTAMP_QUERY`.
@@ -83,6 +87,7 @@ impl GpuTimer {
             march_ms: ms(0, 1),
             resolve_ms: ms(2, 3),
             composite_ms: ms(4, 5),
+            shadow_ms: ms(6, 7),
         })
     }
 }
