@@ -44,6 +44,9 @@ typedef struct {
     uint32_t preset, options;
     double mouse_x, mouse_y;
     int looking;
+    /* The cloud shadow map, read back after each frame for the CPU scene's sunlight. */
+    float *shadow_texels;
+    SceneShadows shadows;
 } App;
 
 static int fail(App *app, const char *what, int32_t rc) {
@@ -155,8 +158,18 @@ static int32_t draw(App *app, double time, NimbusTexture *output) {
     mat_look_at(frame.view, app->eye, v3_add(app->eye, fwd), v3(0.0f, 1.0f, 0.0f));
     mat_perspective(frame.projection, fov, (float)app->width / (float)app->height, 1.0f, 400000.0f);
     mat_mul(view_proj, frame.projection, frame.view);
+    /* The ground and towers darken under the clouds: the last frame's shadow map (none before
+     * the first frame). A GPU host would bind the map instead of reading it back. */
+    app->shadows.texels = NULL;
+    if (nimbus_context_cloud_shadows(app->ctx, &app->shadows.info) == NIMBUS_OK) {
+        size_t floats = 4 * (size_t)app->shadows.info.resolution * app->shadows.info.resolution;
+        if (!app->shadow_texels) app->shadow_texels = malloc(floats * sizeof(float));
+        if (app->shadow_texels &&
+            nimbus_context_read_cloud_shadows(app->ctx, app->shadow_texels, floats) == NIMBUS_OK)
+            app->shadows.texels = app->shadow_texels;
+    }
     scene_render(app->color_buf, app->depth_buf, app->width, app->height, app->eye, fwd, fov, view_proj,
-                 sun, sun_color, illuminance);
+                 sun, sun_color, illuminance, &app->shadows);
     rc = nimbus_texture_write(app->scene, app->color_buf, pixels * 4 * sizeof(float));
     if (rc != NIMBUS_OK) return rc;
     rc = nimbus_texture_write(app->depth, app->depth_buf, pixels * sizeof(float));
@@ -201,16 +214,18 @@ int main(int argc, char **argv) {
     GLFWwindow *window;
     NimbusContextDesc desc = {0};
     NimbusWindowHandle handle = {0};
+    NimbusCloudShadowsExt shadows_ext = {0};
     const char *shot = NULL;
-    int frames = 0, frame, i, w = 960, h = 540;
+    int frames = 0, frame, i, w = 960, h = 540, no_shadows = 0;
     double last, title_time, frame_ms = 0.0;
     char title[160];
 
     for (i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--frames") && i + 1 < argc) frames = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--screenshot") && i + 1 < argc) shot = argv[++i];
+        else if (!strcmp(argv[i], "--no-cloud-shadows")) no_shadows = 1;
         else if (!strcmp(argv[i], "--size") && i + 1 < argc && sscanf(argv[i + 1], "%dx%d", &w, &h) == 2) i++;
-        else { fprintf(stderr, "usage: %s [--size WxH] [--frames N --screenshot FILE.png]\n", argv[0]); return 2; }
+        else { fprintf(stderr, "usage: %s [--size WxH] [--frames N --screenshot FILE.png] [--no-cloud-shadows]\n", argv[0]); return 2; }
     }
     if (shot && frames <= 0) frames = 1;
 
@@ -242,6 +257,12 @@ int main(int argc, char **argv) {
     desc.width = (uint32_t)app.width;
     desc.height = (uint32_t)app.height;
     desc.window = &handle;
+    /* Cloud shadows on the CPU scene: a 40 km square around the camera, 128 texels a side
+     * (312 m), refreshed over 4 frames. */
+    shadows_ext.chain.s_type = NIMBUS_STYPE_CLOUD_SHADOWS;
+    shadows_ext.extent = 40000.0f;
+    shadows_ext.resolution = 128;
+    desc.next = no_shadows ? NULL : &shadows_ext.chain;
     i = nimbus_context_create(&desc, &app.ctx);
     if (i != NIMBUS_OK) { fail(NULL, "nimbus_context_create", i); return 1; }
     printf("nimbus %s on %s\n", nimbus_version_string(), nimbus_context_adapter_name(app.ctx));
@@ -278,6 +299,7 @@ int main(int argc, char **argv) {
     nimbus_context_destroy(app.ctx);
     free(app.color_buf);
     free(app.depth_buf);
+    free(app.shadow_texels);
     glfwDestroyWindow(window);
     glfwTerminate();
     return 0;

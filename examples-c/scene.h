@@ -1,12 +1,52 @@
 /* A small scene "rendered" on the CPU so depth occlusion of the clouds is visible: a sky
  * gradient, a checkered ground plane and a few towers, some tall enough to reach into the
- * cloud layer. Produces linear RGBA color and clip-space depth (standard convention).
+ * cloud layer. Produces linear RGBA color and clip-space depth (standard convention). The
+ * sunlight on the ground and towers goes through the clouds' shadow map when one is given.
  * Header-only, C99. */
 #ifndef NIMBUS_SCENE_H
 #define NIMBUS_SCENE_H
 
 #include <math.h>
 #include "camera.h"
+#include "nimbus.h"
+
+/* A read-back copy of Nimbus's cloud shadow map (nimbus_context_read_cloud_shadows) and its
+ * layout (nimbus_context_cloud_shadows). */
+typedef struct {
+    const float *texels; /* 4 floats per texel: front depth, mean extinction, optical depth, T */
+    NimbusCloudShadowInfo info;
+} SceneShadows;
+
+/* The fraction of sunlight reaching world point p through the clouds: the map's texels
+ * filtered bilinearly (repeat addressing: the map is toroidal), then the Beer shadow map's
+ * optical depth min(mean extinction * max(depth - front, 0), total). 1 outside the square. */
+static inline float scene_sun_visibility(const SceneShadows *s, vec3 p) {
+    const float *m;
+    float u, v, z, fx, fy, wx, wy, tau, texel[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+    int n, x0, y0, k, c;
+    if (!s || !s->texels) return 1.0f;
+    m = s->info.world_to_map;
+    n = (int)s->info.resolution;
+    u = m[0] * p.x + m[4] * p.y + m[8] * p.z + m[12];
+    v = m[1] * p.x + m[5] * p.y + m[9] * p.z + m[13];
+    z = m[2] * p.x + m[6] * p.y + m[10] * p.z + m[14];
+    if (u - s->info.window_origin[0] < 0.0f || u - s->info.window_origin[0] >= 1.0f ||
+        v - s->info.window_origin[1] < 0.0f || v - s->info.window_origin[1] >= 1.0f)
+        return 1.0f;
+    fx = u * (float)n - 0.5f;
+    fy = v * (float)n - 0.5f;
+    x0 = (int)floorf(fx);
+    y0 = (int)floorf(fy);
+    wx = fx - (float)x0;
+    wy = fy - (float)y0;
+    for (k = 0; k < 4; k++) {
+        int x = ((x0 + (k & 1)) % n + n) % n, y = ((y0 + (k >> 1)) % n + n) % n;
+        float w = ((k & 1) ? wx : 1.0f - wx) * ((k >> 1) ? wy : 1.0f - wy);
+        for (c = 0; c < 4; c++) texel[c] += w * s->texels[((size_t)y * (size_t)n + (size_t)x) * 4 + (size_t)c];
+    }
+    tau = texel[1] * (z - texel[0] > 0.0f ? z - texel[0] : 0.0f);
+    return expf(-(tau < texel[2] ? tau : texel[2]));
+}
 
 typedef struct { vec3 lo, hi, albedo; } SceneBox;
 
@@ -60,7 +100,7 @@ static inline int scene_box_hit(vec3 o, vec3 d, const SceneBox *b, float *t_out,
  * to clip space for their depth. */
 static inline void scene_render(float *color, float *depth, int w, int h, vec3 eye, vec3 fwd,
                                 float fov_y, const float view_proj[16], vec3 sun, vec3 sun_color,
-                                float sun_illuminance) {
+                                float sun_illuminance, const SceneShadows *shadows) {
     vec3 right = v3_norm(v3_cross(fwd, v3(0.0f, 1.0f, 0.0f)));
     vec3 up = v3_cross(right, fwd);
     float tan_half = tanf(0.5f * fov_y), aspect = (float)w / (float)h;
@@ -96,7 +136,7 @@ static inline void scene_render(float *color, float *depth, int w, int h, vec3 e
             if (best < 1e29f) {
                 vec3 hit = v3_add(eye, v3_scale(d, best)), ndc;
                 float lambert = v3_dot(n, sun), fog = 1.0f - expf(-best / 40000.0f);
-                lambert = lambert > 0.0f ? lambert : 0.0f;
+                lambert = lambert > 0.0f ? lambert * scene_sun_visibility(shadows, hit) : 0.0f;
                 c = v3_scale(albedo, (0.25f * day + 0.6f * lambert * light));
                 c = v3_add(v3_scale(c, 1.0f - fog), v3_scale(scene_sky(v3(d.x, 0.05f, d.z), sun, sun_color, day), fog));
                 mat_project(view_proj, hit, &ndc);

@@ -228,7 +228,7 @@ static void build_frame(App *a, double time, uint32_t w, uint32_t h, NimbusFrame
     memcpy(a->projection, frame->projection, sizeof a->projection);
     mat_mul(view_proj, frame->projection, frame->view);
     scene_render(a->color_buf, a->depth_buf, (int)w, (int)h, a->eye, fwd, FOV_Y, view_proj, sun, sun_color,
-                 illuminance);
+                 illuminance, NULL);
     frame->depth_flags = 0;
     frame->sun_direction[0] = sun.x; frame->sun_direction[1] = sun.y; frame->sun_direction[2] = sun.z;
     frame->sun_color[0] = sun_color.x; frame->sun_color[1] = sun_color.y; frame->sun_color[2] = sun_color.z;

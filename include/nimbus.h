@@ -74,7 +74,7 @@
 /*
  Minor version.
  */
-#define NIMBUS_VERSION_MINOR 4
+#define NIMBUS_VERSION_MINOR 5
 
 /*
  Patch version.
@@ -93,6 +93,11 @@
  newer header (which may use structs this library does not know) is refused, and so is 0.
  */
 #define NIMBUS_ABI_VERSION ((NIMBUS_VERSION_MAJOR << 16) | NIMBUS_VERSION_MINOR)
+
+/*
+ `s_type` of `NimbusCloudShadowsExt` (chain it to `NimbusContextDesc.next`). Since ABI 0.5.
+ */
+#define NIMBUS_STYPE_CLOUD_SHADOWS 6
 
 /*
  `s_type` of `NimbusSettingsExt` (chain it to `NimbusContextDesc.next`).
@@ -403,6 +408,11 @@ enum NimbusResult
    */
   NIMBUS_ERROR_VULKAN_REQUIREMENT = -13,
   /*
+   The output asked for is not there: the feature that makes it is off, or no frame has
+   rendered it yet (since ABI 0.5).
+   */
+  NIMBUS_ERROR_NOT_READY = -14,
+  /*
    A panic inside Nimbus was caught; the context is now poisoned.
    */
   NIMBUS_ERROR_PANIC = -100,
@@ -599,6 +609,44 @@ typedef struct NimbusWeatherState {
  is valid only during the call. May be called from any thread that uses Nimbus.
  */
 typedef void (*NimbusLogCallback)(int32_t level, const char *message, void *user_data);
+
+/*
+ Where the cloud shadow map stands after the last frame of the default view. Since ABI 0.5.
+ */
+typedef struct NimbusCloudShadowInfo {
+  /*
+   Must be NULL.
+   */
+  const struct NimbusChainedStruct *next;
+  /*
+   World position to map coordinates, column-major (like GLSL's mat4): x and y are
+   texture coordinates (sample with repeat addressing: the map is toroidal), z is the
+   depth along the light in meters. A point at depth z under texel t receives the fraction
+   exp(-min(t.g * max(z - t.r, 0), t.b)) of the sunlight.
+   */
+  float world_to_map[16];
+  /*
+   The direction toward the sun the map was built for.
+   */
+  float sun[3];
+  /*
+   Texels along a side.
+   */
+  uint32_t resolution;
+  /*
+   The map coordinates of the square's first texel corner: a point lies inside the square
+   iff its x and y minus these are both in [0, 1).
+   */
+  float window_origin[2];
+  /*
+   Side of the square in meters.
+   */
+  float extent;
+  /*
+   Written as 0.
+   */
+  uint32_t reserved;
+} NimbusCloudShadowInfo;
 
 /*
  How to create a texture.
@@ -954,6 +1002,36 @@ typedef struct NimbusViewExt {
   uint32_t reserved;
 } NimbusViewExt;
 
+/*
+ Chained to the context's creation: make and update the cloud shadow map, the clouds'
+ optical depth toward the sun over a square around the default view's camera. Zero in a
+ field means its default. Since ABI 0.5.
+ */
+typedef struct NimbusCloudShadowsExt {
+  /*
+   `s_type` = `NIMBUS_STYPE_CLOUD_SHADOWS`.
+   */
+  struct NimbusChainedStruct chain;
+  /*
+   Side of the square in meters, in [1000, 1000000]; 0 = 40000.
+   */
+  float extent;
+  /*
+   Texels along a side, a power of two in [16, 2048]; 0 = 256.
+   */
+  uint32_t resolution;
+  /*
+   Density samples along each texel's ray, in [4, 256]; 0 = 32.
+   */
+  uint32_t steps;
+  /*
+   Frames one refresh of the whole map is spread over, in [1, 16]; 0 = 4. Texels the
+   camera's motion brings into the square, and a sun that turned by more than 0.1 degree,
+   are updated at once.
+   */
+  uint32_t update_slices;
+} NimbusCloudShadowsExt;
+
 
 
 
@@ -1126,6 +1204,30 @@ const char *nimbus_result_name(int32_t code);
  nimbus_context_last_error). Static storage; never free it.
  */
 const char *nimbus_result_message(int32_t code);
+
+/*
+ Writes the cloud shadow map's matrix and layout after the last frame of the default view
+ to `*out`. `NIMBUS_ERROR_NOT_READY` when the context was made without
+ `NimbusCloudShadowsExt` or no frame of the default view has rendered yet. Since ABI 0.5.
+
+ Safety: `ctx` NULL or live; `out` NULL or writable.
+ */
+NimbusResult nimbus_context_cloud_shadows(struct NimbusContext *ctx,
+                                          struct NimbusCloudShadowInfo *out);
+
+/*
+ Copies the cloud shadow map to `out`: `float_count` must be 4 × resolution², filled row by
+ row from texel (0, 0) with (front depth m, mean extinction 1/m, optical depth,
+ transmittance) per texel. Waits for the GPU (for CPU shading and tests, not every frame of
+ a GPU host: bind the texture instead). `NIMBUS_ERROR_NOT_READY` as for
+ `nimbus_context_cloud_shadows`; `NIMBUS_ERROR_INVALID_TARGET` for a wrong count. Since
+ ABI 0.5.
+
+ Safety: `ctx` NULL or live; `out` NULL or writable for `float_count` floats.
+ */
+NimbusResult nimbus_context_read_cloud_shadows(struct NimbusContext *ctx,
+                                               float *out,
+                                               size_t float_count);
 
 /*
  Creates a texture on the context's device: color formats can be scene color or output,

@@ -153,6 +153,7 @@ fn settings_from_chain(next: *const NimbusChainedStruct, abi_minor: u32) -> FfiR
         NIMBUS_STYPE_SETTINGS,
         NIMBUS_STYPE_QUALITY,
         NIMBUS_STYPE_VULKAN_DEVICE,
+        NIMBUS_STYPE_CLOUD_SHADOWS,
     ];
     check_chain(next, &kinds)?;
     let links = links(next);
@@ -215,6 +216,10 @@ fn settings_from_chain(next: *const NimbusChainedStruct, abi_minor: u32) -> FfiR
         if ext.planet_radius != 0.0 {
             s.planet.radius = ext.planet_radius;
         }
+    }
+    if let Some(p) = find(NIMBUS_STYPE_CLOUD_SHADOWS) {
+        // SAFETY: a NIMBUS_STYPE_CLOUD_SHADOWS link is a NimbusCloudShadowsExt per the header.
+        s.shadows = unsafe { super::shadows::shadows_from_ext(p) };
     }
     Ok(s)
 }

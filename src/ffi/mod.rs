@@ -15,6 +15,7 @@
 mod context;
 mod log;
 mod result;
+mod shadows;
 mod texture;
 mod types;
 mod view;
@@ -30,6 +31,7 @@ pub use context::*;
 pub use log::*;
 pub use result::NimbusResult::{self, *};
 pub use result::*;
+pub use shadows::*;
 pub use texture::*;
 pub use types::*;
 pub use view::*;
@@ -41,7 +43,7 @@ use crate::Error;
 /// Major version of the library; a context made with a header of another major version fails.
 pub const NIMBUS_VERSION_MAJOR: u32 = 0;
 /// Minor version.
-pub const NIMBUS_VERSION_MINOR: u32 = 4;
+pub const NIMBUS_VERSION_MINOR: u32 = 5;
 /// Patch version.
 pub const NIMBUS_VERSION_PATCH: u32 = 0;
 /// The oldest minor version of this major whose headers this library still serves.

@@ -50,6 +50,9 @@ pub enum NimbusResult {
     /// The host's Vulkan instance or device lacks an API version, extension, feature or queue
     /// Nimbus needs, or describes it inconsistently (since ABI 0.3; the message names it).
     NIMBUS_ERROR_VULKAN_REQUIREMENT = -13,
+    /// The output asked for is not there: the feature that makes it is off, or no frame has
+    /// rendered it yet (since ABI 0.5).
+    NIMBUS_ERROR_NOT_READY = -14,
     /// A panic inside Nimbus was caught; the context is now poisoned.
     NIMBUS_ERROR_PANIC = -100,
     /// The context was poisoned by an earlier panic; only nimbus_context_destroy remains.
@@ -76,6 +79,7 @@ pub(crate) const ALL_RESULTS: &[NimbusResult] = &[
     NIMBUS_ERROR_WEATHER,
     NIMBUS_ERROR_SURFACE,
     NIMBUS_ERROR_VULKAN_REQUIREMENT,
+    NIMBUS_ERROR_NOT_READY,
     NIMBUS_ERROR_PANIC,
     NIMBUS_ERROR_POISONED,
     NIMBUS_ERROR_DEVICE_LOST,
@@ -107,6 +111,7 @@ impl NimbusResult {
             NIMBUS_ERROR_WEATHER => "NIMBUS_ERROR_WEATHER\0",
             NIMBUS_ERROR_SURFACE => "NIMBUS_ERROR_SURFACE\0",
             NIMBUS_ERROR_VULKAN_REQUIREMENT => "NIMBUS_ERROR_VULKAN_REQUIREMENT\0",
+            NIMBUS_ERROR_NOT_READY => "NIMBUS_ERROR_NOT_READY\0",
             NIMBUS_ERROR_PANIC => "NIMBUS_ERROR_PANIC\0",
             NIMBUS_ERROR_POISONED => "NIMBUS_ERROR_POISONED\0",
             NIMBUS_ERROR_DEVICE_LOST => "NIMBUS_ERROR_DEVICE_LOST\0",
@@ -138,6 +143,9 @@ impl NimbusResult {
             NIMBUS_ERROR_SURFACE => "the window surface could not be created or configured\0",
             NIMBUS_ERROR_VULKAN_REQUIREMENT => {
                 "the host's Vulkan instance or device lacks something Nimbus needs\0"
+            }
+            NIMBUS_ERROR_NOT_READY => {
+                "the output is not there: its feature is off or no frame has made it yet\0"
             }
             NIMBUS_ERROR_PANIC => "a panic inside Nimbus was caught; the context is poisoned\0",
             NIMBUS_ERROR_POISONED => "the context was poisoned by an earlier panic\0",
@@ -209,6 +217,7 @@ mod tests {
             (NIMBUS_ERROR_WEATHER, -11),
             (NIMBUS_ERROR_SURFACE, -12),
             (NIMBUS_ERROR_VULKAN_REQUIREMENT, -13),
+            (NIMBUS_ERROR_NOT_READY, -14),
             (NIMBUS_ERROR_PANIC, -100),
             (NIMBUS_ERROR_POISONED, -101),
             (NIMBUS_ERROR_DEVICE_LOST, -200),

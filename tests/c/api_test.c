@@ -77,6 +77,18 @@ PIN_OFFSET(NimbusTargets, next, 0);
 PIN_OFFSET(NimbusTargets, scene_color, 8);
 PIN_OFFSET(NimbusTargets, scene_depth, 16);
 PIN_OFFSET(NimbusTargets, output, 24);
+PIN_SIZE(NimbusCloudShadowsExt, 32);
+PIN_OFFSET(NimbusCloudShadowsExt, extent, 16);
+PIN_OFFSET(NimbusCloudShadowsExt, resolution, 20);
+PIN_OFFSET(NimbusCloudShadowsExt, steps, 24);
+PIN_OFFSET(NimbusCloudShadowsExt, update_slices, 28);
+PIN_SIZE(NimbusCloudShadowInfo, 104);
+PIN_OFFSET(NimbusCloudShadowInfo, world_to_map, 8);
+PIN_OFFSET(NimbusCloudShadowInfo, sun, 72);
+PIN_OFFSET(NimbusCloudShadowInfo, resolution, 84);
+PIN_OFFSET(NimbusCloudShadowInfo, window_origin, 88);
+PIN_OFFSET(NimbusCloudShadowInfo, extent, 96);
+PIN_OFFSET(NimbusCloudShadowInfo, reserved, 100);
 
 /* Result codes are enum constants: arithmetic on them compiles. */
 PIN(codes_are_constants, 0 - NIMBUS_ERROR_NULL_POINTER == 1);
@@ -214,6 +226,8 @@ static void test_create(void) {
     NimbusChainedStruct unknown = {999, NULL};
     NimbusSettingsExt s = {0}, s2 = {0};
     NimbusQualityExt q = {0};
+    NimbusCloudShadowsExt cs = {0};
+    NimbusCloudShadowInfo info;
     NimbusWindowHandle win = {0};
 
     EXPECT(nimbus_context_create(NULL, &out), NIMBUS_ERROR_NULL_POINTER);
@@ -283,12 +297,68 @@ static void test_create(void) {
     EXPECT(nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_ARGUMENT);
     TRUE(out == before); /* out untouched on every failure */
     desc.window = NULL;
+    /* Since ABI 0.5: the cloud shadow map, its ranges checked like every setting. */
+    cs.chain.s_type = NIMBUS_STYPE_CLOUD_SHADOWS;
+    q.chain.next = &cs.chain;
+    cs.resolution = 300;
+    EXPECT_MSG(NULL, nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_SETTINGS, "shadows.resolution");
+    cs.resolution = 32;
+    cs.extent = NAN;
+    EXPECT_MSG(NULL, nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_SETTINGS, "shadows.extent");
+    cs.extent = 8000.0f;
+    cs.update_slices = 99;
+    EXPECT_MSG(NULL, nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_SETTINGS, "shadows.update_slices");
+    cs.update_slices = 1;
+    TRUE(out == before);
     /* The quality level first; the explicit step counts refine it. */
     s.march_max_steps = 64; s.march_min_steps = 32; s.jitter = NIMBUS_JITTER_OFF;
     log_count = 0;
     EXPECT_ON(NULL, nimbus_context_create(&desc, &ctx), NIMBUS_OK);
     TRUE(log_count > 0); /* wgpu's device creation logs at debug level */
     TRUE(log_reentered);
+    /* No frame yet: no map to report. */
+    memset(&info, 0, sizeof info);
+    EXPECT_MSG(ctx, nimbus_context_cloud_shadows(ctx, &info), NIMBUS_ERROR_NOT_READY, "render a frame");
+}
+
+/* Since ABI 0.5: the cloud shadow map's matrix and texels after a frame. */
+static void test_cloud_shadows(void) {
+    NimbusCloudShadowInfo info;
+    NimbusChainedStruct unknown = {999, NULL};
+    float *texels;
+    size_t n, i, bad = 0, count;
+    float u, v, cam[3] = {0.0f, 2.0f, 0.0f};
+    const float *m;
+
+    EXPECT_ON(ctx, render_ok(), NIMBUS_OK);
+    memset(&info, 0, sizeof info);
+    EXPECT(nimbus_context_cloud_shadows(NULL, &info), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT_ON(ctx, nimbus_context_cloud_shadows(ctx, NULL), NIMBUS_ERROR_NULL_POINTER);
+    info.next = &unknown;
+    EXPECT_ON(ctx, nimbus_context_cloud_shadows(ctx, &info), NIMBUS_ERROR_UNKNOWN_STRUCT);
+    info.next = NULL;
+    EXPECT_ON(ctx, nimbus_context_cloud_shadows(ctx, &info), NIMBUS_OK);
+    TRUE(info.resolution == 32 && info.extent == 8000.0f && info.reserved == 0);
+    /* The camera sits inside the square the map covers, near its middle. */
+    m = info.world_to_map;
+    u = m[0] * cam[0] + m[4] * cam[1] + m[8] * cam[2] + m[12] - info.window_origin[0];
+    v = m[1] * cam[0] + m[5] * cam[1] + m[9] * cam[2] + m[13] - info.window_origin[1];
+    TRUE(u > 0.4f && u < 0.6f && v > 0.4f && v < 0.6f);
+    n = (size_t)info.resolution;
+    count = 4 * n * n;
+    texels = malloc(count * sizeof *texels);
+    if (!texels) return;
+    EXPECT(nimbus_context_read_cloud_shadows(NULL, texels, count), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT_ON(ctx, nimbus_context_read_cloud_shadows(ctx, NULL, count), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT_MSG(ctx, nimbus_context_read_cloud_shadows(ctx, texels, count - 4), NIMBUS_ERROR_INVALID_TARGET, "float_count");
+    EXPECT_ON(ctx, nimbus_context_read_cloud_shadows(ctx, texels, count), NIMBUS_OK);
+    /* Every texel: transmittance in [0, 1] and exp(-optical depth). */
+    for (i = 0; i < n * n; i++) {
+        float tau = texels[4 * i + 2], t = texels[4 * i + 3];
+        if (!(t >= 0.0f && t <= 1.0f && tau >= 0.0f && fabsf(t - expf(-tau)) < 2e-3f)) bad++;
+    }
+    TRUE(bad == 0);
+    free(texels);
 }
 
 static void test_textures(void) {
@@ -709,6 +779,14 @@ static void test_second_context(void) {
     desc.next = &s.chain;
     EXPECT_ON(NULL, nimbus_context_create(&desc, &b), NIMBUS_OK);
     if (!b) return;
+    {
+        /* Made without NimbusCloudShadowsExt: no map, even after a frame. */
+        NimbusCloudShadowInfo info;
+        float texel[4];
+        memset(&info, 0, sizeof info);
+        EXPECT_MSG(b, nimbus_context_cloud_shadows(b, &info), NIMBUS_ERROR_NOT_READY, "NimbusCloudShadowsExt");
+        EXPECT_ON(b, nimbus_context_read_cloud_shadows(b, texel, 4), NIMBUS_ERROR_NOT_READY);
+    }
     b_color = make_texture_on(b, W, H, NIMBUS_FORMAT_RGBA16_FLOAT);
     b_out = make_texture_on(b, W, H, NIMBUS_FORMAT_RGBA16_FLOAT);
     b_depth = make_texture_on(b, W, H, NIMBUS_FORMAT_R32_FLOAT);
@@ -909,6 +987,7 @@ int main(int argc, char **argv) {
     test_render();
     test_owned_formats();
     test_views();
+    test_cloud_shadows();
     test_weather_and_resize();
     test_second_context();
     test_old_header_and_device_loss();

@@ -1012,7 +1012,7 @@ int main(int argc, char **argv) {
         frame_defaults(&f);
         mat_mul(vp, f.projection, f.view);
         scene_render(scene_color, scene_depth, W, H, eye, fwd, 1.2f, vp, sun_from_angles(40.0f, 30.0f),
-                     v3(1.0f, 1.0f, 1.0f), 10.0f);
+                     v3(1.0f, 1.0f, 1.0f), 10.0f, NULL);
         vks_write_scene(&staging, color.format, depth.format, W, H, scene_color, scene_depth);
         if (vks_upload_scene(&G, &staging, &color, &depth, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
                              VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL)) {
