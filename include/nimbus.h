@@ -431,6 +431,12 @@ typedef int32_t NimbusResult;
 #endif /* __cplusplus */
 
 /*
+ A CPU cloud query (see `nimbus_context_create_cloud_query`): independent of its context
+ once made, safe to use from several threads at once. Since ABI 0.5.
+ */
+typedef struct NimbusCloudQuery NimbusCloudQuery;
+
+/*
  An opaque Nimbus context (see `nimbus_context_create`).
  */
 typedef struct NimbusContext NimbusContext;
@@ -1192,6 +1198,63 @@ NimbusResult nimbus_context_reset_history(struct NimbusContext *ctx);
 NimbusResult nimbus_set_log_callback(NimbusLogCallback callback,
                                      void *user_data,
                                      int32_t max_level);
+
+/*
+ Makes a CPU query that answers as the context renders: the cloud density at a point, the
+ transmittance along a segment, the coverage above a point, at any host time, transitions
+ included, until the next weather request or settings change (make a new one then; the
+ old one keeps the old weather). The first after creation or a weather request reads the
+ noise and weather maps back (waits for the GPU); later ones share that copy. The horizon
+ gradient is measured from the camera of the last frame of the default view. Free it with
+ `nimbus_cloud_query_destroy` (it may outlive the context). Since ABI 0.5.
+
+ Safety: `ctx` NULL or live; `out` NULL or writable.
+ */
+NimbusResult nimbus_context_create_cloud_query(struct NimbusContext *ctx,
+                                               struct NimbusCloudQuery **out);
+
+/*
+ Writes the unitless cloud density at world point `p` (3 floats, m) at host time `time` to
+ `*out`, as the march computes it (the extinction is this times the weather's extinction).
+ `NIMBUS_ERROR_INVALID_ARGUMENT` for a non-finite point or time. Since ABI 0.5.
+
+ Safety: `query` NULL or live; `p` NULL or 3 readable floats; `out` NULL or writable.
+ */
+NimbusResult nimbus_cloud_query_density(const struct NimbusCloudQuery *query,
+                                        const float *p,
+                                        double time,
+                                        float *out);
+
+/*
+ Writes the clouds' transmittance along the segment from `a` to `b` (3 floats each, m) at
+ host time `time` to `*out`, in [0, 1]: is the sun visible from a point (b far toward the
+ sun), is an aircraft in cloud. The ground does not block. Since ABI 0.5.
+
+ Safety: `query` NULL or live; `a`, `b` NULL or 3 readable floats; `out` NULL or writable.
+ */
+NimbusResult nimbus_cloud_query_transmittance(const struct NimbusCloudQuery *query,
+                                              const float *a,
+                                              const float *b,
+                                              double time,
+                                              float *out);
+
+/*
+ Writes the cloud coverage above the horizontal position of `p` (3 floats, m) at host time
+ `time` to `*out`, in [0, 1]: the densest layer's coverage there. Since ABI 0.5.
+
+ Safety: `query` NULL or live; `p` NULL or 3 readable floats; `out` NULL or writable.
+ */
+NimbusResult nimbus_cloud_query_coverage_above(const struct NimbusCloudQuery *query,
+                                               const float *p,
+                                               double time,
+                                               float *out);
+
+/*
+ Frees a query. NULL is a no-op. No call may be using it. Since ABI 0.5.
+
+ Safety: `query` NULL or from `nimbus_context_create_cloud_query`, not yet destroyed.
+ */
+void nimbus_cloud_query_destroy(struct NimbusCloudQuery *query);
 
 /*
  The name of a result code, e.g. "NIMBUS_ERROR_NULL_POINTER"; "NIMBUS_UNKNOWN_RESULT" for

@@ -57,6 +57,9 @@ pub enum Error {
     /// A view id that names no live view, or too many views.
     #[error("view: {0}")]
     InvalidView(String),
+    /// A CPU query's point, segment or time is unusable (NaN, infinite).
+    #[error("invalid query: {0}")]
+    InvalidQuery(String),
     /// `encode` was called before any successful `prepare`.
     #[error("renderer not prepared: call prepare() with the frame inputs before encode()")]
     NotPrepared,

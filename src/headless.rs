@@ -432,6 +432,20 @@ impl Headless {
         )?))
     }
 
+    /// The GPU's cloud density (unitless, finest noise mip) at `points` for the frame
+    /// `frame` (its time, and its camera for the horizon gradient): the reference the CPU
+    /// queries ([`Renderer::cloud_query`]) are tested against. Builds a pipeline per call:
+    /// for tests, not frame loops.
+    pub fn gpu_density(&self, frame: &FrameInputs, points: &[glam::Vec3]) -> Result<Vec<f32>> {
+        let uniforms = self.renderer.march_uniforms(frame)?;
+        let (device, queue, noise, weather) = self.renderer.medium();
+        let out = gpu_scope(device, || {
+            crate::gpu::probe::probe_density(device, queue, noise, weather, &uniforms, points)
+        })??;
+        self.take_errors()?;
+        Ok(out)
+    }
+
     /// One mip level of a baked noise volume, RGBA8, x fastest then y then z.
     pub fn read_noise(&self, which: NoiseVolume, mip: u32) -> Result<Vec<u8>> {
         let texture = self.renderer.noise_volume(which);

@@ -111,6 +111,8 @@ pub struct Renderer {
     timer: Option<GpuTimer>,
     /// The cloud shadow map, when `settings.shadows.enabled`.
     shadow: Option<ShadowPass>,
+    /// The read-back textures CPU queries use, until the next weather or settings change.
+    query_data: Option<std::sync::Arc<crate::query::QueryData>>,
 }
 
 /// The cloud shadow map as the last frame of the default view left it: the texture, its
@@ -351,6 +353,7 @@ impl Renderer {
                 last_view: ViewId::DEFAULT,
                 timer: None,
                 shadow,
+                query_data: None,
             }
         })
     }
@@ -420,6 +423,7 @@ impl Renderer {
             self.clear_bind_groups();
         }
         self.settings = settings;
+        self.query_data = None;
         // Accumulated history was rendered with the old settings.
         self.reset_history();
         Ok(())
@@ -480,6 +484,7 @@ impl Renderer {
         // Only now, with the GPU work accepted, do the maps and the timeline move together.
         self.weather_maps.commit(slots);
         self.timeline = timeline;
+        self.query_data = None;
         if duration == 0.0 {
             // An instant change: the map must not show the old weather for a few frames.
             if let Some(pass) = &mut self.shadow {
@@ -500,6 +505,7 @@ impl Renderer {
         let slots = gpu_scope(&device, || self.weather_maps.hold(&device, &queue, action))?;
         self.weather_maps.commit(slots);
         self.timeline = timeline;
+        self.query_data = None;
         Ok(())
     }
 
@@ -781,6 +787,41 @@ impl Renderer {
                 .shadow
                 .as_ref()
                 .map_or(0, |p| texture_bytes(&p.texture))
+    }
+
+    /// CPU queries (density, transmittance, coverage) that answer as this renderer renders:
+    /// see [`CloudQuery`](crate::CloudQuery). The first call after creation, a weather request
+    /// or a settings change reads the noise volumes and weather maps back (waits for the GPU:
+    /// 9 MB at the default sizes); later ones share that copy and cost nothing. A query made
+    /// before a weather request keeps answering for the weather as it was: make a new one.
+    pub fn cloud_query(&mut self) -> Result<crate::CloudQuery> {
+        use crate::query::{QueryData, Texels};
+        let camera = self
+            .views
+            .get(ViewId::DEFAULT)
+            .ok()
+            .and_then(|v| v.pending)
+            .map_or(glam::Vec3::ZERO, |p| p.camera);
+        if let Some(data) = &self.query_data {
+            return Ok(crate::CloudQuery::new(data.clone(), camera));
+        }
+        let read = |t: &wgpu::Texture| -> Result<Texels> {
+            Ok(Texels {
+                size: t.width(),
+                depth: t.depth_or_array_layers(),
+                rgba: crate::device::read_texture(&self.device, &self.queue, t, 0)?,
+            })
+        };
+        let (from, to) = self.weather_maps.textures();
+        let data = std::sync::Arc::new(QueryData {
+            settings: self.settings.clone(),
+            timeline: self.timeline.clone(),
+            base: read(self.noise.volume(NoiseVolume::Base))?,
+            detail: read(self.noise.volume(NoiseVolume::Detail))?,
+            maps: (read(from)?, read(to)?),
+        });
+        self.query_data = Some(data.clone());
+        Ok(crate::CloudQuery::new(data, camera))
     }
 
     /// The cloud shadow map, once a frame of the default view has been encoded with

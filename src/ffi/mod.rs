@@ -14,6 +14,7 @@
 
 mod context;
 mod log;
+mod query;
 mod result;
 mod shadows;
 mod texture;
@@ -29,6 +30,7 @@ use std::sync::Once;
 
 pub use context::*;
 pub use log::*;
+pub use query::*;
 pub use result::NimbusResult::{self, *};
 pub use result::*;
 pub use shadows::*;
@@ -90,7 +92,9 @@ impl From<Error> for FfiError {
             Error::InvalidWeather(_) => NIMBUS_ERROR_WEATHER,
             Error::Surface(_) => NIMBUS_ERROR_SURFACE,
             Error::Vulkan(_) => NIMBUS_ERROR_VULKAN_REQUIREMENT,
-            Error::Image(_) | Error::InvalidView(_) => NIMBUS_ERROR_INVALID_ARGUMENT,
+            Error::Image(_) | Error::InvalidView(_) | Error::InvalidQuery(_) => {
+                NIMBUS_ERROR_INVALID_ARGUMENT
+            }
             Error::DeviceLost(_) => NIMBUS_ERROR_DEVICE_LOST,
         };
         let mut message = e.to_string();

@@ -7,6 +7,7 @@ pub(crate) mod composite;
 pub(crate) mod compute;
 pub(crate) mod march;
 pub mod noise;
+pub(crate) mod probe;
 pub(crate) mod readback;
 pub(crate) mod shaders;
 pub(crate) mod shadow;

@@ -30,6 +30,7 @@ pub(crate) const MEDIUM: (&str, &str) = shader!("medium.wgsl");
 pub(crate) const DIFFUSION: (&str, &str) = shader!("diffusion.wgsl");
 pub(crate) const MARCH: (&str, &str) = shader!("march.wgsl");
 pub(crate) const SHADOW: (&str, &str) = shader!("shadow.wgsl");
+pub(crate) const DENSITY_PROBE: (&str, &str) = shader!("density_probe.wgsl");
 pub(crate) const PATH_TRACE: (&str, &str) = shader!("path_trace.wgsl");
 pub(crate) const TEMPORAL: (&str, &str) = shader!("temporal.wgsl");
 pub(crate) const COMPOSITE: (&str, &str) = shader!("composite.wgsl");
@@ -48,6 +49,10 @@ pub(crate) const PASSES: &[(&str, &[(&str, &str)])] = &[
         ],
     ),
     ("shadow", &[COMMON, ATMOSPHERE, DENSITY, MEDIUM, SHADOW]),
+    (
+        "density_probe",
+        &[COMMON, ATMOSPHERE, DENSITY, MEDIUM, DENSITY_PROBE],
+    ),
     (
         "path_trace",
         &[

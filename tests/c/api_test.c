@@ -361,6 +361,55 @@ static void test_cloud_shadows(void) {
     free(texels);
 }
 
+/* Since ABI 0.5: CPU queries, from two threads at once. */
+struct query_worker { NimbusCloudQuery *q; float result; int failures; };
+static void *query_frames(void *arg) {
+    struct query_worker *w = (struct query_worker *)arg;
+    float a[3] = {100.0f, 0.0f, -300.0f}, b[3] = {100.0f, 9000.0f, -300.0f};
+    int i;
+    for (i = 0; i < 200; i++)
+        if (nimbus_cloud_query_transmittance(w->q, a, b, 12.5, &w->result) != NIMBUS_OK) w->failures++;
+    return NULL;
+}
+
+static void test_cloud_query(void) {
+    NimbusCloudQuery *q = NULL;
+    float p[3] = {0.0f, 2000.0f, -4000.0f}, up[3] = {0.0f, 9000.0f, -4000.0f}, nan_p[3] = {0.0f, NAN, 0.0f};
+    float v = -1.0f, again = -2.0f;
+    EXPECT(nimbus_context_create_cloud_query(NULL, &q), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT_ON(ctx, nimbus_context_create_cloud_query(ctx, NULL), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT_ON(ctx, nimbus_context_create_cloud_query(ctx, &q), NIMBUS_OK);
+    if (!q) return;
+    EXPECT(nimbus_cloud_query_density(q, p, 0.0, &v), NIMBUS_OK);
+    TRUE(v >= 0.0f && isfinite(v));
+    EXPECT(nimbus_cloud_query_density(q, p, 0.0, &again), NIMBUS_OK);
+    TRUE(v == again); /* same point, same time: same answer */
+    EXPECT(nimbus_cloud_query_transmittance(q, p, up, 0.0, &v), NIMBUS_OK);
+    TRUE(v >= 0.0f && v <= 1.0f);
+    EXPECT(nimbus_cloud_query_coverage_above(q, p, 0.0, &v), NIMBUS_OK);
+    TRUE(v >= 0.0f && v <= 1.0f);
+    EXPECT(nimbus_cloud_query_density(NULL, p, 0.0, &v), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT(nimbus_cloud_query_density(q, NULL, 0.0, &v), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT(nimbus_cloud_query_density(q, p, 0.0, NULL), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT_MSG(NULL, nimbus_cloud_query_density(q, nan_p, 0.0, &v), NIMBUS_ERROR_INVALID_ARGUMENT, "finite");
+    EXPECT_MSG(NULL, nimbus_cloud_query_density(q, p, NAN, &v), NIMBUS_ERROR_INVALID_ARGUMENT, "time");
+    EXPECT(nimbus_cloud_query_transmittance(q, p, NULL, 0.0, &v), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT(nimbus_cloud_query_transmittance(q, nan_p, up, 0.0, &v), NIMBUS_ERROR_INVALID_ARGUMENT);
+    EXPECT(nimbus_cloud_query_coverage_above(q, p, INFINITY, &v), NIMBUS_ERROR_INVALID_ARGUMENT);
+    {
+        pthread_t ta, tb;
+        struct query_worker wa, wb;
+        wa.q = q; wa.failures = 0; wb.q = q; wb.failures = 0;
+        pthread_create(&ta, NULL, query_frames, &wa);
+        pthread_create(&tb, NULL, query_frames, &wb);
+        pthread_join(ta, NULL);
+        pthread_join(tb, NULL);
+        TRUE(wa.failures == 0 && wb.failures == 0 && wa.result == wb.result);
+    }
+    nimbus_cloud_query_destroy(q);
+    nimbus_cloud_query_destroy(NULL);
+}
+
 static void test_textures(void) {
     NimbusTextureDesc d = {0};
     NimbusTexture *t = NULL;
@@ -820,7 +869,17 @@ static void test_second_context(void) {
     }
 
     nimbus_texture_destroy(b_color); nimbus_texture_destroy(b_out); nimbus_texture_destroy(b_depth);
-    nimbus_context_destroy(b);
+    {
+        /* A query outlives its context. */
+        NimbusCloudQuery *q = NULL;
+        float p[3] = {0.0f, 1500.0f, 0.0f}, before = -1.0f, after = -2.0f;
+        EXPECT_ON(b, nimbus_context_create_cloud_query(b, &q), NIMBUS_OK);
+        EXPECT(nimbus_cloud_query_density(q, p, 3.0, &before), NIMBUS_OK);
+        nimbus_context_destroy(b);
+        EXPECT(nimbus_cloud_query_density(q, p, 3.0, &after), NIMBUS_OK);
+        TRUE(before == after);
+        nimbus_cloud_query_destroy(q);
+    }
     /* A texture outliving its context: only destroy works. */
     EXPECT_MSG(NULL, nimbus_texture_write(orphan, px, sizeof px), NIMBUS_ERROR_INVALID_TARGET, "destroyed");
     EXPECT(nimbus_texture_read(orphan, px, sizeof px), NIMBUS_ERROR_INVALID_TARGET);
@@ -988,6 +1047,7 @@ int main(int argc, char **argv) {
     test_owned_formats();
     test_views();
     test_cloud_shadows();
+    test_cloud_query();
     test_weather_and_resize();
     test_second_context();
     test_old_header_and_device_loss();
