@@ -22,7 +22,7 @@ typedef struct {
  * optical depth min(mean extinction * max(depth - front, 0), total). 1 outside the square. */
 static inline float scene_sun_visibility(const SceneShadows *s, vec3 p) {
     const float *m;
-    float u, v, z, fx, fy, wx, wy, tau, texel[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+    float u, v, z, fx, fy, wx, wy, tau, margin, texel[4] = {0.0f, 0.0f, 0.0f, 0.0f};
     int n, x0, y0, k, c;
     if (!s || !s->texels) return 1.0f;
     m = s->info.world_to_map;
@@ -30,8 +30,11 @@ static inline float scene_sun_visibility(const SceneShadows *s, vec3 p) {
     u = m[0] * p.x + m[4] * p.y + m[8] * p.z + m[12];
     v = m[1] * p.x + m[5] * p.y + m[9] * p.z + m[13];
     z = m[2] * p.x + m[6] * p.y + m[10] * p.z + m[14];
-    if (u - s->info.window_origin[0] < 0.0f || u - s->info.window_origin[0] >= 1.0f ||
-        v - s->info.window_origin[1] < 0.0f || v - s->info.window_origin[1] >= 1.0f)
+    /* Half a texel in from the edge: the bilinear footprint must not reach across the
+     * toroidal seam into the square's other side. */
+    margin = 0.5f / (float)n;
+    if (u - s->info.window_origin[0] < margin || u - s->info.window_origin[0] >= 1.0f - margin ||
+        v - s->info.window_origin[1] < margin || v - s->info.window_origin[1] >= 1.0f - margin)
         return 1.0f;
     fx = u * (float)n - 0.5f;
     fy = v * (float)n - 0.5f;

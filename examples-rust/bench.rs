@@ -34,6 +34,7 @@ enum Variant {
     Reference,
     Level(Quality),
     Without(&'static str),
+    With(&'static str),
 }
 
 /// The optimisations the ablation switches off one at a time.
@@ -48,12 +49,18 @@ const OPTIMISATIONS: [&str; 6] = [
     "delta_eddington",
 ];
 
+/// Options the default level leaves off, priced by rows with each switched on.
+/// "shadow_map_light": the cloud shadow map on, and the march's light read from it beyond the
+/// first `shadows.local_distance` meters (the row's time includes the map's update).
+const ADDITIONS: [&str; 1] = ["shadow_map_light"];
+
 impl Variant {
     fn name(self) -> String {
         match self {
             Variant::Reference => "reference".into(),
             Variant::Level(q) => format!("{q:?}").to_lowercase(),
             Variant::Without(o) => format!("medium-no-{o}"),
+            Variant::With(o) => format!("medium-with-{o}"),
         }
     }
 }
@@ -91,6 +98,16 @@ fn settings_for(weather: &Weather, variant: Variant) -> Settings {
                     s.lighting.multiple_scattering.model = MultipleScatteringModel::Octaves
                 }
                 _ => unreachable!("unknown optimisation {o}"),
+            }
+        }
+        Variant::With(o) => {
+            Quality::Medium.apply(&mut s);
+            match o {
+                "shadow_map_light" => {
+                    s.shadows.enabled = true;
+                    s.shadows.march_light = true;
+                }
+                _ => unreachable!("unknown addition {o}"),
             }
         }
     }
@@ -165,7 +182,8 @@ fn measure(
         if i + tail >= frames {
             wall.push(elapsed);
             if let Some(p) = h.renderer().last_pass_times().map_err(|e| e.to_string())? {
-                march.push(p.march_ms);
+                // The cloud shadow map's update (when on) counts with the march it serves.
+                march.push(p.march_ms + p.shadow_ms);
                 resolve.push(p.resolve_ms);
                 comp.push(p.composite_ms);
             }
@@ -350,6 +368,7 @@ fn level_names() -> Vec<String> {
 fn ablation_names() -> Vec<String> {
     std::iter::once(Variant::Level(Quality::Medium))
         .chain(OPTIMISATIONS.iter().map(|o| Variant::Without(o)))
+        .chain(ADDITIONS.iter().map(|o| Variant::With(o)))
         .map(Variant::name)
         .collect()
 }
@@ -584,7 +603,11 @@ fn run() -> Result<(), String> {
     let levels: Vec<Variant> = Quality::ALL.iter().map(|q| Variant::Level(*q)).collect();
     // The first scene also runs the default level with each optimisation switched off in turn
     // (sharing its reference).
-    let ablation: Vec<Variant> = OPTIMISATIONS.iter().map(|o| Variant::Without(o)).collect();
+    let ablation: Vec<Variant> = OPTIMISATIONS
+        .iter()
+        .map(|o| Variant::Without(o))
+        .chain(ADDITIONS.iter().map(|o| Variant::With(o)))
+        .collect();
 
     let mut h = new_headless(size)?;
     let adapter = format!("{} ({:?})", h.adapter_info().name, h.adapter_info().backend);
@@ -596,10 +619,12 @@ fn run() -> Result<(), String> {
         }
         for row in scene_rows(&mut h, weather, *v, &variants, started)? {
             let medium = row.config == Variant::Level(Quality::Medium).name();
-            if i == 0 && (medium || row.config.starts_with("medium-no-")) {
+            let ablated =
+                row.config.starts_with("medium-no-") || row.config.starts_with("medium-with-");
+            if i == 0 && (medium || ablated) {
                 ablation_rows.push(row.clone());
             }
-            if !row.config.starts_with("medium-no-") {
+            if !ablated {
                 level_rows.push(row);
             }
         }

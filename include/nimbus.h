@@ -100,6 +100,12 @@
 #define NIMBUS_STYPE_CLOUD_SHADOWS 6
 
 /*
+ `NimbusCloudShadowsExt.flags`: the march reads the long part of its light path toward the
+ sun from the map (a few light samples next to each cloud sample, then the map). Since ABI 0.5.
+ */
+#define NIMBUS_CLOUD_SHADOWS_MARCH_LIGHT 1
+
+/*
  `s_type` of `NimbusSettingsExt` (chain it to `NimbusContextDesc.next`).
  */
 #define NIMBUS_STYPE_SETTINGS 1
@@ -1036,6 +1042,14 @@ typedef struct NimbusCloudShadowsExt {
    are updated at once.
    */
   uint32_t update_slices;
+  /*
+   `NIMBUS_CLOUD_SHADOWS_*` flags; 0 = none.
+   */
+  uint32_t flags;
+  /*
+   Must be 0.
+   */
+  uint32_t reserved;
 } NimbusCloudShadowsExt;
 
 

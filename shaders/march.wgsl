@@ -12,6 +12,15 @@ fn scene_viewport() -> vec4f {
 // b: density samples taken along the ray, a: density samples taken toward the sun.
 @group(0) @binding(8) var depth_out: texture_storage_2d<rgba32float, write>;
 
+// The cloud shadow map (shaders/shadow.wgsl) and where it lies, for the light march's long
+// part (u.shadow_light.x on). A 1x1 stand-in with window.w = 0 when there is no map.
+struct ShadowSampling {
+    world_to_map: mat4x4f,
+    window: vec4f,          // xy: the square's origin in map coordinates, w: 1 once updated
+}
+@group(0) @binding(10) var shadow_map: texture_2d<f32>;
+@group(0) @binding(11) var<storage, read> shadow_sampling: ShadowSampling;
+
 // Density samples taken toward the sun by this invocation (the per-ray counter).
 var<private> light_samples: u32;
 
@@ -78,17 +87,38 @@ fn sun_optical_depth(p: vec3f, n: u32, footprint: f32) -> f32 {
     if (ground.hit && ground.t0 > 0.0) {
         return 1e4;
     }
-    let length_total = min(light_exit(p, d), u.ambient_top.w);
+    var length_total = min(light_exit(p, d), u.ambient_top.w);
+    var n_steps = n;
+    // Beer shadow map light (Hillaire 2016; three-clouds' "BSM"): march only the first
+    // local meters, where the self-shadowing next to the sample lives, and read the optical
+    // depth from there to the sun from the map: min(mean extinction * (depth - front), total).
+    // The map covers the whole path (no light_distance cut). Outside its square: march.
+    var tau_map = 0.0;
+    if (u.shadow_light.x > 0.5 && shadow_sampling.window.w > 0.5) {
+        let local = min(u.shadow_light.y, light_exit(p, d));
+        let q = p + d * local;
+        let m = shadow_sampling.world_to_map * vec4f(q, 1.0);
+        let inside = m.xy - shadow_sampling.window.xy;
+        // Half a texel in from the square's edge, so that the bilinear footprint does not
+        // reach across the toroidal seam into the square's other side.
+        let margin = 0.5 / f32(textureDimensions(shadow_map).x);
+        if (all(inside >= vec2f(margin)) && all(inside < vec2f(1.0 - margin))) {
+            let t = textureSampleLevel(shadow_map, noise_sampler, m.xy, 0.0);
+            tau_map = min(t.g * max(m.z - t.r, 0.0), t.b);
+            length_total = local;
+            n_steps = u32(u.shadow_light.z);
+        }
+    }
     let ratio = u.cirrus.w;
     // First step of a geometric series of n steps summing to the total (uniform for r = 1).
-    var unit = length_total / f32(n);
+    var unit = length_total / f32(n_steps);
     if (ratio > 1.0001) {
-        unit = length_total * (ratio - 1.0) / (pow(ratio, f32(n)) - 1.0);
+        unit = length_total * (ratio - 1.0) / (pow(ratio, f32(n_steps)) - 1.0);
     }
     var t = 0.0;
     var tau = 0.0;
     var len = unit;
-    for (var i = 0u; i < n; i++) {
+    for (var i = 0u; i < n_steps; i++) {
         // Light samples beyond LIGHT_DETAIL_DISTANCE only see the base shape: detail is
         // invisible in a soft shadow (Schneider 2015), and it saves fetches. A fixed distance
         // (rather than "after the second step") keeps the model the same for every step layout,
@@ -101,7 +131,7 @@ fn sun_optical_depth(p: vec3f, n: u32, footprint: f32) -> f32 {
         t += len;
         len *= ratio;
     }
-    return tau * u.shape.z;
+    return tau * u.shape.z + tau_map;
 }
 
 // Optical depth straight down from p (density sigma_t there) to the bottom of the medium,

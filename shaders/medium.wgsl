@@ -33,6 +33,7 @@ struct MarchUniforms {
     opts: vec4f,            // coarse-then-fine, distance-grown steps, noise LOD, light LOD (0/1)
     viewport: vec4f,        // the rectangle of the scene targets rendered: x, y, width, height (px)
     ms_model: vec4f,        // multiple scattering: 0 single, 1 octaves, 2 delta-Eddington; y: phase g
+    shadow_light: vec4f,    // light from the cloud shadow map (0/1), local distance (m), local steps, unused
 }
 
 // Per-frame parameters: a read-only storage buffer, not a uniform (lavapipe compiles a shader

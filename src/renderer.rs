@@ -13,7 +13,7 @@ use crate::gpu::composite::{CompositeCache, CompositeInputs, CompositeUniforms};
 use crate::gpu::march::{MarchPipeline, MarchUniforms};
 use crate::gpu::noise::{NoiseTextures, NoiseVolume};
 use crate::gpu::shaders::DepthKind;
-use crate::gpu::shadow::{ShadowFrame, ShadowPass};
+use crate::gpu::shadow::{NoShadow, ShadowFrame, ShadowPass};
 use crate::gpu::temporal::{ResolveFrame, TemporalPipeline, TemporalUniforms};
 use crate::gpu::timing::{GpuTimer, PassTimes};
 use crate::gpu::weather::WeatherMaps;
@@ -111,6 +111,8 @@ pub struct Renderer {
     timer: Option<GpuTimer>,
     /// The cloud shadow map, when `settings.shadows.enabled`.
     shadow: Option<ShadowPass>,
+    /// What the march binds in its place otherwise.
+    no_shadow: NoShadow,
     /// The read-back textures CPU queries use, until the next weather or settings change.
     query_data: Option<std::sync::Arc<crate::query::QueryData>>,
 }
@@ -353,6 +355,7 @@ impl Renderer {
                 last_view: ViewId::DEFAULT,
                 timer: None,
                 shadow,
+                no_shadow: NoShadow::new(device),
                 query_data: None,
             }
         })
@@ -645,6 +648,10 @@ impl Renderer {
                 scene_depth,
                 &fresh.clouds.view,
                 &fresh.depth.view,
+                match &self.shadow {
+                    Some(p) => (&p.view, &p.sampling),
+                    None => (&self.no_shadow.view, &self.no_shadow.sampling),
+                },
                 (fresh.clouds.texture.width(), fresh.clouds.texture.height()),
                 self.timer.as_ref(),
             );

@@ -51,6 +51,18 @@ pub struct CloudShadows {
     /// square, a sun that turned by more than 0.1°, and a settings change are updated at once.
     /// Default 4.
     pub update_slices: u32,
+    /// Let the march read the long part of its light path toward the sun from the map (a
+    /// "Beer shadow map" light march, as three-clouds does): `local_steps` light samples
+    /// over the first `local_distance` meters resolve the self-shadowing next to the sample,
+    /// the map gives the optical depth from there to the sun. Samples outside the map's
+    /// square march the whole way. Needs `enabled`. Default false.
+    pub march_light: bool,
+    /// Length (m) of the light path marched sample by sample before the map takes over, in
+    /// [10, 10000]. Default 1000: the map's linear ramp through a texel's clouds (its one
+    /// approximation) then only has to stand for the light's far part.
+    pub local_distance: f32,
+    /// Light samples over `local_distance`, in [1, 32]. Default 4.
+    pub local_steps: u32,
 }
 
 impl Default for CloudShadows {
@@ -61,6 +73,9 @@ impl Default for CloudShadows {
             resolution: 256,
             steps: 32,
             update_slices: 4,
+            march_light: false,
+            local_distance: 1_000.0,
+            local_steps: 4,
         }
     }
 }
@@ -648,6 +663,14 @@ impl Settings {
         pow2("shadows.resolution", sh.resolution, 16, 2048)?;
         count("shadows.steps", sh.steps, 4, 256)?;
         count("shadows.update_slices", sh.update_slices, 1, 16)?;
+        in_range("shadows.local_distance", sh.local_distance, 10.0, 10_000.0)?;
+        count("shadows.local_steps", sh.local_steps, 1, 32)?;
+        if sh.march_light && !sh.enabled {
+            return Err(invalid(
+                "shadows.march_light",
+                "needs shadows.enabled: the march reads its light from the map",
+            ));
+        }
         Ok(())
     }
 }
@@ -672,12 +695,18 @@ mod tests {
     #[test]
     fn shadow_map_ranges_are_checked() {
         type Break = fn(&mut CloudShadows);
-        let cases: [(&str, Break); 5] = [
+        let cases: [(&str, Break); 8] = [
             ("shadows.extent", |c| c.extent = f32::NAN),
             ("shadows.extent", |c| c.extent = 10.0),
             ("shadows.resolution", |c| c.resolution = 300),
             ("shadows.steps", |c| c.steps = 0),
             ("shadows.update_slices", |c| c.update_slices = 17),
+            ("shadows.local_distance", |c| c.local_distance = 5.0),
+            ("shadows.local_steps", |c| c.local_steps = 0),
+            ("shadows.march_light", |c| {
+                c.enabled = false;
+                c.march_light = true
+            }),
         ];
         for (field, break_it) in cases {
             let mut s = Settings::default();

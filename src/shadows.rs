@@ -38,11 +38,15 @@ impl CloudShadowSampler {
     }
 
     /// The fraction of sunlight that reaches world point `p` through the clouds (bilinear,
-    /// like a GPU sampler with repeat addressing), or `None` outside the map's square.
+    /// like a GPU sampler with repeat addressing), or `None` outside the map's square (less
+    /// half a texel at its edges, where the filter would reach across the toroidal seam).
     pub fn transmittance(&self, p: Vec3) -> Option<f32> {
         let q = self.world_to_map * p.extend(1.0);
         let inside = Vec2::new(q.x, q.y) - self.window_origin;
-        if inside.min_element() < 0.0 || inside.max_element() >= 1.0 {
+        // Half a texel in from the edge: the bilinear footprint must not reach across the
+        // toroidal seam into the square's other side.
+        let margin = 0.5 / self.resolution as f32;
+        if inside.min_element() < margin || inside.max_element() >= 1.0 - margin {
             return None;
         }
         let n = self.resolution as i64;

@@ -219,7 +219,7 @@ fn settings_from_chain(next: *const NimbusChainedStruct, abi_minor: u32) -> FfiR
     }
     if let Some(p) = find(NIMBUS_STYPE_CLOUD_SHADOWS) {
         // SAFETY: a NIMBUS_STYPE_CLOUD_SHADOWS link is a NimbusCloudShadowsExt per the header.
-        s.shadows = unsafe { super::shadows::shadows_from_ext(p) };
+        s.shadows = unsafe { super::shadows::shadows_from_ext(p) }?;
     }
     Ok(s)
 }

@@ -28,7 +28,15 @@ pub struct NimbusCloudShadowsExt {
     /// camera's motion brings into the square, and a sun that turned by more than 0.1 degree,
     /// are updated at once.
     pub update_slices: u32,
+    /// `NIMBUS_CLOUD_SHADOWS_*` flags; 0 = none.
+    pub flags: u32,
+    /// Must be 0.
+    pub reserved: u32,
 }
+
+/// `NimbusCloudShadowsExt.flags`: the march reads the long part of its light path toward the
+/// sun from the map (a few light samples next to each cloud sample, then the map). Since ABI 0.5.
+pub const NIMBUS_CLOUD_SHADOWS_MARCH_LIGHT: u32 = 1;
 
 /// Where the cloud shadow map stands after the last frame of the default view. Since ABI 0.5.
 #[repr(C)]
@@ -57,12 +65,23 @@ pub struct NimbusCloudShadowInfo {
 /// The shadow-map settings of a creation chain's `NimbusCloudShadowsExt`.
 ///
 /// Safety: `p` points to a `NimbusCloudShadowsExt`.
-pub(crate) unsafe fn shadows_from_ext(p: *const NimbusChainedStruct) -> CloudShadows {
+pub(crate) unsafe fn shadows_from_ext(
+    p: *const NimbusChainedStruct,
+) -> Result<CloudShadows, FfiError> {
     // SAFETY: the caller found this link by its s_type, which promises the struct.
     let ext = unsafe { &*p.cast::<NimbusCloudShadowsExt>() };
+    if ext.flags & !NIMBUS_CLOUD_SHADOWS_MARCH_LIGHT != 0 {
+        return Err(FfiError::arg(format!(
+            "unknown NimbusCloudShadowsExt.flags bits 0x{:x}",
+            ext.flags & !NIMBUS_CLOUD_SHADOWS_MARCH_LIGHT
+        )));
+    }
+    if ext.reserved != 0 {
+        return Err(FfiError::arg("NimbusCloudShadowsExt.reserved must be 0"));
+    }
     let d = CloudShadows::default();
     let or = |v: u32, default: u32| if v == 0 { default } else { v };
-    CloudShadows {
+    Ok(CloudShadows {
         enabled: true,
         extent: if ext.extent == 0.0 {
             d.extent
@@ -72,7 +91,9 @@ pub(crate) unsafe fn shadows_from_ext(p: *const NimbusChainedStruct) -> CloudSha
         resolution: or(ext.resolution, d.resolution),
         steps: or(ext.steps, d.steps),
         update_slices: or(ext.update_slices, d.update_slices),
-    }
+        march_light: ext.flags & NIMBUS_CLOUD_SHADOWS_MARCH_LIGHT != 0,
+        ..d
+    })
 }
 
 fn not_ready() -> FfiError {
@@ -170,7 +191,9 @@ mod tests {
     #[test]
     fn cloud_shadow_layouts_are_pinned() {
         use std::mem::{offset_of, size_of};
-        assert_eq!(size_of::<NimbusCloudShadowsExt>(), 32);
+        assert_eq!(size_of::<NimbusCloudShadowsExt>(), 40);
+        assert_eq!(offset_of!(NimbusCloudShadowsExt, flags), 32);
+        assert_eq!(offset_of!(NimbusCloudShadowsExt, reserved), 36);
         assert_eq!(offset_of!(NimbusCloudShadowsExt, extent), 16);
         assert_eq!(offset_of!(NimbusCloudShadowsExt, resolution), 20);
         assert_eq!(offset_of!(NimbusCloudShadowsExt, steps), 24);

@@ -47,6 +47,18 @@ pub(crate) struct MarchUniforms {
     viewport: [f32; 4],
     /// Multiple-scattering model (0 single, 1 octaves, 2 delta-Eddington), phase asymmetry g.
     ms_model: [f32; 4],
+    /// Light from the cloud shadow map (0/1), local light distance (m), local light steps.
+    shadow_light: [f32; 4],
+}
+
+/// Where the march finds the cloud shadow map: layout must match `ShadowSampling` in
+/// shaders/march.wgsl. Written by the shadow pass with each update.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub(crate) struct ShadowSampling {
+    pub world_to_map: [f32; 16],
+    /// xy: the window's origin in map coordinates; w: 1 once the map holds an update.
+    pub window: [f32; 4],
 }
 
 /// Two horizontal axes perpendicular to `up` (X and Z for +Y up).
@@ -213,6 +225,12 @@ impl MarchUniforms {
                 0.0,
                 0.0,
             ],
+            shadow_light: [
+                flag(s.shadows.enabled && s.shadows.march_light),
+                s.shadows.local_distance,
+                s.shadows.local_steps as f32,
+                0.0,
+            ],
         }
     }
 }
@@ -364,6 +382,8 @@ impl MarchPipeline {
                     texture_entry(6, depth_type, D::D2),
                     storage_entry(7, wgpu::TextureFormat::Rgba16Float),
                     storage_entry(8, wgpu::TextureFormat::Rgba32Float),
+                    texture_entry(10, S::Float { filterable: true }, D::D2),
+                    params_entry::<ShadowSampling>(11),
                 ],
             ]
             .concat(),
@@ -387,6 +407,7 @@ impl MarchPipeline {
         scene_depth: &wgpu::TextureView,
         march_out: &wgpu::TextureView,
         depth_out: &wgpu::TextureView,
+        shadow: (&wgpu::TextureView, &wgpu::Buffer),
         size: (u32, u32),
         timer: Option<&super::timing::GpuTimer>,
     ) {
@@ -395,11 +416,22 @@ impl MarchPipeline {
             resource: wgpu::BindingResource::TextureView(v),
         };
         let mut views = medium_views(noise, weather).to_vec();
-        views.extend([scene_depth, march_out, depth_out]);
+        // The shadow buffer belongs to the shadow view's pass (or is the renderer's stand-in
+        // with its stand-in view): the view alone keys it.
+        views.extend([scene_depth, march_out, depth_out, shadow.0]);
         let layout = &self.layout;
         let bind = self.binds.get(uniforms, &views, || {
             let mut entries = medium_entries(uniforms, noise, weather);
-            entries.extend([tex(6, scene_depth), tex(7, march_out), tex(8, depth_out)]);
+            entries.extend([
+                tex(6, scene_depth),
+                tex(7, march_out),
+                tex(8, depth_out),
+                tex(10, shadow.0),
+                wgpu::BindGroupEntry {
+                    binding: 11,
+                    resource: shadow.1.as_entire_binding(),
+                },
+            ]);
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("nimbus march"),
                 layout,
@@ -425,12 +457,12 @@ mod tests {
 
     #[test]
     fn uniforms_match_the_wgsl_struct_size() {
-        // 1 mat4 + 29 vec4 in shaders/medium.wgsl.
-        assert_eq!(std::mem::size_of::<MarchUniforms>(), 64 + 29 * 16);
+        // 1 mat4 + 30 vec4 in shaders/medium.wgsl.
+        assert_eq!(std::mem::size_of::<MarchUniforms>(), 64 + 30 * 16);
         let src = pass_source("march", DepthKind::Depth);
         let start = src.find("struct MarchUniforms").unwrap();
         let body = &src[start..start + src[start..].find('}').unwrap()];
-        assert_eq!(body.matches(": vec4f").count(), 29);
+        assert_eq!(body.matches(": vec4f").count(), 30);
         assert_eq!(body.matches(": mat4x4f").count(), 1);
     }
 

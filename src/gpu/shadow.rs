@@ -8,7 +8,9 @@ use glam::{DVec3, Mat4, Vec3, Vec4};
 
 use super::bind_cache::BindCache;
 use super::compute::{frame_pipeline, params_entry, storage_entry, timed_dispatch};
-use super::march::{medium_entries, medium_layout_entries, medium_views, tangent_basis};
+use super::march::{
+    medium_entries, medium_layout_entries, medium_views, tangent_basis, ShadowSampling,
+};
 use super::noise::NoiseTextures;
 use super::shaders::DepthKind;
 use crate::settings::CloudShadows;
@@ -212,6 +214,8 @@ pub(crate) struct ShadowPass {
     pub texture: wgpu::Texture,
     pub view: wgpu::TextureView,
     params: wgpu::Buffer,
+    /// Where the march finds the map (`ShadowSampling`), written with each update.
+    pub sampling: wgpu::Buffer,
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
     binds: BindCache,
@@ -241,6 +245,7 @@ impl ShadowPass {
             usage: super::compute::FRAME_PARAMS_USAGE,
             mapped_at_creation: false,
         });
+        let sampling = shadow_sampling_buffer(device);
         let (layout, pipeline) = frame_pipeline(
             device,
             "nimbus cloud shadows",
@@ -261,6 +266,7 @@ impl ShadowPass {
             texture,
             view,
             params,
+            sampling,
             layout,
             pipeline,
             binds: BindCache::default(),
@@ -330,6 +336,11 @@ impl ShadowPass {
         );
         self.world_to_map = Some(matrix);
         self.window_origin = glam::Vec2::new(params.grid[2], params.grid[3]) / params.grid[0];
+        let sampling = ShadowSampling {
+            world_to_map: matrix.to_cols_array(),
+            window: [self.window_origin.x, self.window_origin.y, 0.0, 1.0],
+        };
+        queue.write_buffer(&self.sampling, 0, bytemuck::bytes_of(&sampling));
         self.sun = self.plan.basis.map_or(frame.sun, |b| b.sun);
     }
 
@@ -339,6 +350,40 @@ impl ShadowPass {
 
     pub(crate) fn clear_bind_groups(&mut self) {
         self.binds.clear();
+    }
+}
+
+/// A `ShadowSampling` buffer (zeroed: "no map yet").
+pub(crate) fn shadow_sampling_buffer(device: &wgpu::Device) -> wgpu::Buffer {
+    device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("nimbus shadow sampling"),
+        size: std::mem::size_of::<ShadowSampling>() as u64,
+        usage: super::compute::FRAME_PARAMS_USAGE,
+        mapped_at_creation: false,
+    })
+}
+
+/// What the march binds when there is no shadow map: a 1×1 texture and a zeroed sampling
+/// buffer (window.w = 0: the march ignores the map).
+pub(crate) struct NoShadow {
+    pub view: wgpu::TextureView,
+    pub sampling: wgpu::Buffer,
+}
+
+impl NoShadow {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        let view = super::texture_2d(
+            device,
+            "nimbus no cloud shadow map",
+            (1, 1),
+            SHADOW_FORMAT,
+            wgpu::TextureUsages::TEXTURE_BINDING,
+        )
+        .create_view(&Default::default());
+        Self {
+            view,
+            sampling: shadow_sampling_buffer(device),
+        }
     }
 }
 
@@ -353,6 +398,7 @@ mod tests {
             resolution: 256,
             steps: 32,
             update_slices: 4,
+            ..CloudShadows::default()
         }
     }
 

@@ -77,7 +77,9 @@ PIN_OFFSET(NimbusTargets, next, 0);
 PIN_OFFSET(NimbusTargets, scene_color, 8);
 PIN_OFFSET(NimbusTargets, scene_depth, 16);
 PIN_OFFSET(NimbusTargets, output, 24);
-PIN_SIZE(NimbusCloudShadowsExt, 32);
+PIN_SIZE(NimbusCloudShadowsExt, 40);
+PIN_OFFSET(NimbusCloudShadowsExt, flags, 32);
+PIN_OFFSET(NimbusCloudShadowsExt, reserved, 36);
 PIN_OFFSET(NimbusCloudShadowsExt, extent, 16);
 PIN_OFFSET(NimbusCloudShadowsExt, resolution, 20);
 PIN_OFFSET(NimbusCloudShadowsExt, steps, 24);
@@ -309,6 +311,12 @@ static void test_create(void) {
     cs.update_slices = 99;
     EXPECT_MSG(NULL, nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_SETTINGS, "shadows.update_slices");
     cs.update_slices = 1;
+    cs.flags = 0x80;
+    EXPECT_MSG(NULL, nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_ARGUMENT, "flags");
+    cs.flags = NIMBUS_CLOUD_SHADOWS_MARCH_LIGHT;
+    cs.reserved = 1;
+    EXPECT_MSG(NULL, nimbus_context_create(&desc, &out), NIMBUS_ERROR_INVALID_ARGUMENT, "reserved");
+    cs.reserved = 0;
     TRUE(out == before);
     /* The quality level first; the explicit step counts refine it. */
     s.march_max_steps = 64; s.march_min_steps = 32; s.jitter = NIMBUS_JITTER_OFF;
