@@ -79,6 +79,25 @@ fn scene(
     (color, depth)
 }
 
+/// Uploads the host's scene (ground lit through `shadows`), renders `frames` frames over it
+/// so the clouds settle, and writes the result to `path`.
+fn render_scene(
+    h: &mut Headless,
+    f: &FrameInputs,
+    size: (u32, u32),
+    shadows: Option<&CloudShadowSampler>,
+    frames: u32,
+    path: &std::path::Path,
+) -> Result<(), String> {
+    let err = |e: nimbus::Error| e.to_string();
+    let (color, depth) = scene(f, size, shadows);
+    h.upload_scene(&color, Some(&depth)).map_err(err)?;
+    for _ in 0..frames {
+        h.render(f).map_err(err)?;
+    }
+    write_png(path, &h.read_output().map_err(err)?, size.0, size.1, 1.0).map_err(err)
+}
+
 fn run() -> Result<(), String> {
     let mut args = std::env::args().skip(1);
     let (mut out, mut size, mut preset, mut frames) = (None, (640, 360), Preset::Sparse, 32);
@@ -126,36 +145,20 @@ fn run() -> Result<(), String> {
 
     // First the unshadowed ground, which also makes the map; then the host shades its ground
     // with the map and the clouds settle over it.
-    let (color, depth) = scene(&f, size, None);
-    h.upload_scene(&color, Some(&depth)).map_err(err)?;
-    for _ in 0..frames {
-        h.render(&f).map_err(err)?;
-    }
-    write_png(
+    render_scene(
+        &mut h,
+        &f,
+        size,
+        None,
+        frames,
         &out.join("cloud_shadows_unshadowed.png"),
-        &h.read_output().map_err(err)?,
-        size.0,
-        size.1,
-        1.0,
-    )
-    .map_err(err)?;
+    )?;
     let map = h.renderer().cloud_shadows().ok_or("no shadow map")?;
     let (n, extent) = (map.resolution, map.extent);
     let texels = h.read_cloud_shadows().map_err(err)?;
     let sampler = CloudShadowSampler::new(&map, texels.clone()).ok_or("bad map size")?;
-    let (color, depth) = scene(&f, size, Some(&sampler));
-    h.upload_scene(&color, Some(&depth)).map_err(err)?;
-    for _ in 0..frames {
-        h.render(&f).map_err(err)?;
-    }
-    write_png(
-        &out.join("cloud_shadows.png"),
-        &h.read_output().map_err(err)?,
-        size.0,
-        size.1,
-        1.0,
-    )
-    .map_err(err)?;
+    let shadowed = out.join("cloud_shadows.png");
+    render_scene(&mut h, &f, size, Some(&sampler), frames, &shadowed)?;
     // The map as stored (toroidal: the camera's texel is wherever the window starts).
     let shown: Vec<[f32; 4]> = texels.iter().map(|t| [t[3], t[3], t[3], 1.0]).collect();
     write_png(&out.join("cloud_shadow_map.png"), &shown, n, n, 4.0).map_err(err)?;
