@@ -106,6 +106,11 @@
 #define NIMBUS_CLOUD_SHADOWS_MARCH_LIGHT 1
 
 /*
+ The per-frame output contract's version (`NimbusFrameOutputs.version`). Since ABI 0.5.
+ */
+#define NIMBUS_FRAME_OUTPUTS_VERSION 1
+
+/*
  `s_type` of `NimbusSettingsExt` (chain it to `NimbusContextDesc.next`).
  */
 #define NIMBUS_STYPE_SETTINGS 1
@@ -659,6 +664,33 @@ typedef struct NimbusCloudShadowInfo {
    */
   uint32_t reserved;
 } NimbusCloudShadowInfo;
+
+/*
+ A view's per-frame outputs besides the picture (contract version
+ `NIMBUS_FRAME_OUTPUTS_VERSION`; docs/frame-outputs.md). Since ABI 0.5.
+ */
+typedef struct NimbusFrameOutputs {
+  /*
+   Must be NULL.
+   */
+  const struct NimbusChainedStruct *next;
+  /*
+   `NIMBUS_FRAME_OUTPUTS_VERSION` of the library that wrote it.
+   */
+  uint32_t version;
+  /*
+   The cloud image's size: the viewport divided by the trace resolution's divisor.
+   */
+  uint32_t grid_width;
+  /*
+   See `grid_width`.
+   */
+  uint32_t grid_height;
+  /*
+   1 when the context keeps a cloud shadow map (`nimbus_context_cloud_shadows`), else 0.
+   */
+  uint32_t has_cloud_shadows;
+} NimbusFrameOutputs;
 
 /*
  How to create a texture.
@@ -1303,6 +1335,30 @@ NimbusResult nimbus_context_cloud_shadows(struct NimbusContext *ctx,
  Safety: `ctx` NULL or live; `out` NULL or writable for `float_count` floats.
  */
 NimbusResult nimbus_context_read_cloud_shadows(struct NimbusContext *ctx,
+                                               float *out,
+                                               size_t float_count);
+
+/*
+ Writes what `view`'s last frame left besides the picture to `*out`: the contract version,
+ the cloud image's grid size, whether a shadow map exists. `NIMBUS_ERROR_NOT_READY` before
+ the view's first frame; `NIMBUS_ERROR_INVALID_ARGUMENT` for an unknown view. Since ABI 0.5.
+
+ Safety: `ctx` NULL or live; `out` NULL or writable.
+ */
+NimbusResult nimbus_context_frame_outputs(struct NimbusContext *ctx,
+                                          uint32_t view,
+                                          struct NimbusFrameOutputs *out);
+
+/*
+ Copies `view`'s cloud image to `out`: `float_count` must be 4 × grid_width × grid_height
+ (from `nimbus_context_frame_outputs`), filled row by row with (transmittance, front depth
+ in m, representative depth in m, 0) per grid pixel; depths are 0 where the ray met no
+ cloud. Waits for the GPU. Since ABI 0.5.
+
+ Safety: `ctx` NULL or live; `out` NULL or writable for `float_count` floats.
+ */
+NimbusResult nimbus_context_read_frame_outputs(struct NimbusContext *ctx,
+                                               uint32_t view,
                                                float *out,
                                                size_t float_count);
 

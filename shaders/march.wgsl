@@ -9,8 +9,10 @@ fn scene_viewport() -> vec4f {
 //!SCENE_DEPTH_BINDING(6)
 @group(0) @binding(7) var march_out: texture_storage_2d<rgba16float, write>;
 // r: representative cloud depth (m, 0 = no cloud), g: the scene distance the ray was clipped at,
-// b: density samples taken along the ray, a: density samples taken toward the sun.
+// b: 0, a: front depth (m, where the ray first met cloud; 0 = no cloud).
 @group(0) @binding(8) var depth_out: texture_storage_2d<rgba32float, write>;
+// The per-ray counters: density samples taken along the ray, and toward the sun.
+@group(0) @binding(12) var stats_out: texture_storage_2d<rg32float, write>;
 
 // The cloud shadow map (shaders/shadow.wgsl) and where it lies, for the light march's long
 // part (u.shadow_light.x on). A 1x1 stand-in with window.w = 0 when there is no map.
@@ -193,6 +195,8 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
     var radiance = vec3f(0.0);
     var transmittance = 1.0;
     var cloud_depth = 0.0;
+    // Where the ray first met cloud (the start of the first step with density), 0 = never.
+    var front_depth = 0.0;
     let clouds_possible = debug_mode() != DEBUG_OFF || u.shape.x > 0.0 || u.horizon.x > 0.0;
     if (total > 0.0 && clouds_possible) {
         // Step count grows with the length inside the layer (long horizon paths get more steps).
@@ -276,6 +280,11 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
                 continue;
             }
             empty_run = 0u;
+            if (front_depth == 0.0) {
+                // The start of this step (not the jittered sample): the same for every visit.
+                let s0 = total * pow(x0, power);
+                front_depth = max(select(seg.b.x + (s0 - len_a), seg.a.x + s0, s0 < len_a), 1e-3);
+            }
             let sigma_t = density * u.shape.z;
             let tau = sun_optical_depth(p, light_step_count(t), footprint);
             // Wrenninge 2015 multiple-scattering octaves.
@@ -353,9 +362,13 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
             if (cloud_depth == 0.0) {
                 cloud_depth = c.distance;
             }
+            if (front_depth == 0.0 || c.distance < front_depth) {
+                front_depth = c.distance;
+            }
             transmittance *= c.transmittance;
         }
     }
     textureStore(march_out, id.xy, vec4f(radiance, transmittance));
-    textureStore(depth_out, id.xy, vec4f(cloud_depth, scene_t, f32(samples), f32(light_samples)));
+    textureStore(depth_out, id.xy, vec4f(cloud_depth, scene_t, 0.0, front_depth));
+    textureStore(stats_out, id.xy, vec4f(f32(samples), f32(light_samples), 0.0, 0.0));
 }

@@ -66,11 +66,12 @@ struct Neighbourhood {
     lo: vec4f,
     hi: vec4f,
     cloud_depth: f32,
+    front_depth: f32,
     found: bool,
 }
 
 fn fresh_neighbourhood(p: vec2u, k: u32, offset: vec2u, grid: vec2u, scene_t: f32) -> Neighbourhood {
-    var n = Neighbourhood(vec4f(0.0, 0.0, 0.0, 1.0), vec4f(1e9), vec4f(-1e9), 0.0, false);
+    var n = Neighbourhood(vec4f(0.0, 0.0, 0.0, 1.0), vec4f(1e9), vec4f(-1e9), 0.0, 0.0, false);
     // Sparse texel s holds grid pixel s * k + offset; only those inside the grid were written.
     if (any(grid <= offset)) {
         return n;
@@ -82,6 +83,7 @@ fn fresh_neighbourhood(p: vec2u, k: u32, offset: vec2u, grid: vec2u, scene_t: f3
     var sum = vec4f(0.0);
     var total = 0.0;
     var depth_sum = 0.0;
+    var front_sum = 0.0;
     var depth_w = 0.0;
     for (var j = 0; j < 4; j++) {
         let o = vec2i(j & 1, j >> 1);
@@ -101,6 +103,7 @@ fn fresh_neighbourhood(p: vec2u, k: u32, offset: vec2u, grid: vec2u, scene_t: f3
         n.hi = max(n.hi, v);
         if (d.x > 0.0) {
             depth_sum += w * d.x;
+            front_sum += w * d.w;
             depth_w += w;
         }
     }
@@ -110,6 +113,7 @@ fn fresh_neighbourhood(p: vec2u, k: u32, offset: vec2u, grid: vec2u, scene_t: f3
     }
     if (depth_w > 0.0) {
         n.cloud_depth = depth_sum / depth_w;
+        n.front_depth = front_sum / depth_w;
     }
     return n;
 }
@@ -205,6 +209,7 @@ fn resolve(@builtin(global_invocation_id) id: vec3u) {
 
     var value: vec4f;
     var cloud_depth: f32;
+    var front_depth: f32;
     var samples: f32;
     if (history.weight > 1e-3) {
         var h = history.value;
@@ -218,21 +223,26 @@ fn resolve(@builtin(global_invocation_id) id: vec3u) {
         }
         samples = history.depth.z;
         cloud_depth = history.depth.x;
+        front_depth = history.depth.w;
         value = h;
         if (is_fresh) {
             samples = min(samples + 1.0, tu.pattern.w);
             value = mix(h, fresh, 1.0 / samples);
             cloud_depth = fresh_d.x;
+            front_depth = fresh_d.w;
         }
     } else if (is_fresh) {
         value = fresh;
         cloud_depth = fresh_d.x;
+        front_depth = fresh_d.w;
         samples = 1.0;
     } else {
         value = around.blend;
         cloud_depth = around.cloud_depth;
+        front_depth = around.front_depth;
         samples = 0.0;
     }
     textureStore(out_clouds, p, value);
-    textureStore(out_depth, p, vec4f(cloud_depth, scene_t, samples, 0.0));
+    // a: the front depth (m) of the last sample that reached this pixel (0 = no cloud).
+    textureStore(out_depth, p, vec4f(cloud_depth, scene_t, samples, front_depth));
 }

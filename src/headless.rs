@@ -143,6 +143,23 @@ fn from_f16(bytes: &[u8]) -> Vec<[f32; 4]> {
         .collect()
 }
 
+/// Reads a frame's cloud textures back as (T, front depth, representative depth, 0) per grid
+/// pixel.
+pub(crate) fn read_outputs(
+    device: &wgpu::Device,
+    queue: &wgpu::Queue,
+    out: &crate::FrameOutputs,
+) -> Result<Vec<[f32; 4]>> {
+    let clouds = from_f16(&read_texture(device, queue, out.clouds.texture(), 0)?);
+    let depth: Vec<f32> =
+        bytemuck::pod_collect_to_vec(&read_texture(device, queue, out.depth.texture(), 0)?);
+    Ok(clouds
+        .iter()
+        .zip(depth.chunks_exact(4))
+        .map(|(c, d)| [c[3], d[3], d[0], 0.0])
+        .collect())
+}
+
 impl Headless {
     /// Creates a device of its own and a renderer on it.
     pub fn new(settings: Settings) -> Result<Self> {
@@ -371,6 +388,14 @@ impl Headless {
         )?))
     }
 
+    /// The default view's last frame outputs on the trace grid, per pixel (transmittance,
+    /// front depth m, representative depth m, 0): the read-back form of
+    /// [`Renderer::frame_outputs`]'s cloud textures (0 depths = no cloud).
+    pub fn read_frame_outputs(&self) -> Result<Vec<[f32; 4]>> {
+        let out = self.renderer.frame_outputs(crate::ViewId::DEFAULT)?;
+        read_outputs(&self.device, &self.queue, &out)
+    }
+
     /// The last frame's representative cloud depth in meters (0 where there is no cloud), at
     /// the trace resolution.
     pub fn read_cloud_depth(&self) -> Result<Vec<f32>> {
@@ -395,15 +420,15 @@ impl Headless {
         let texels: Vec<f32> = bytemuck::pod_collect_to_vec(&bytes);
         let width = texture.width();
         let (mut rays, mut samples, mut light) = (0u64, 0f64, 0f64);
-        for (i, t) in texels.chunks_exact(4).enumerate() {
+        for (i, t) in texels.chunks_exact(2).enumerate() {
             let (x, y) = (i as u32 % width, i as u32 / width);
             // Texels whose grid pixel lies outside the grid were not traced.
             let gx = x * layout.block + layout.offset.0;
             let gy = y * layout.block + layout.offset.1;
             if gx < layout.grid.0 && gy < layout.grid.1 {
                 rays += 1;
-                samples += t[2] as f64;
-                light += t[3] as f64;
+                samples += t[0] as f64;
+                light += t[1] as f64;
             }
         }
         let per_ray = |v: f64| if rays == 0 { 0.0 } else { v / rays as f64 };

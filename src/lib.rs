@@ -49,7 +49,9 @@ pub use gpu::timing::PassTimes;
 pub use headless::{Headless, LiveObjects, RayStats};
 pub use query::CloudQuery;
 pub use reference::{Orders, PathTracer};
-pub use renderer::{CloudShadowMap, ColorTargets, Renderer, Targets, Viewport};
+pub use renderer::{
+    CloudShadowMap, ColorTargets, FrameOutputs, Renderer, Targets, Viewport, FRAME_OUTPUTS_VERSION,
+};
 pub use settings::{CloudShadows, DebugDensity, Quality, Settings, Temporal, TracePattern};
 pub use shadows::{shadow_optical_depth, CloudShadowSampler};
 pub use view::ViewId;

@@ -143,6 +143,33 @@ pub struct CloudShadowMap<'a> {
     pub extent: f32,
 }
 
+/// Version of the per-frame output contract ([`FrameOutputs`], C `NimbusFrameOutputs`). A
+/// change of any field's meaning or layout takes a new version; new fields alone do not.
+pub const FRAME_OUTPUTS_VERSION: u32 = 1;
+
+/// What a view's last frame leaves for the host besides the composited picture: the cloud
+/// image on the trace grid (for depth-aware transparents, fog and the host's own compositing)
+/// and the cloud shadow map. Contract version [`FRAME_OUTPUTS_VERSION`]; see
+/// docs/frame-outputs.md.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameOutputs<'a> {
+    /// [`FRAME_OUTPUTS_VERSION`].
+    pub version: u32,
+    /// Size of the two cloud textures: the viewport divided by the trace resolution's divisor
+    /// (grid pixel (x, y) covers viewport pixels (x, y) × divisor, same projection).
+    pub grid: (u32, u32),
+    /// `Rgba16Float`: rgb the clouds' in-scattered radiance L (linear, the sun's units), a their
+    /// transmittance T; the composite is `scene × T + L`.
+    pub clouds: &'a wgpu::TextureView,
+    /// `Rgba32Float`: r the clouds' representative depth (m along the ray from the camera,
+    /// weighted by where their light comes from), g the scene distance the ray stopped at,
+    /// b reserved, a the front depth (m: where the ray first met cloud). r and a are 0 where
+    /// the ray met no cloud.
+    pub depth: &'a wgpu::TextureView,
+    /// The cloud shadow map, when on ([`Renderer::cloud_shadows`]).
+    pub shadows: Option<CloudShadowMap<'a>>,
+}
+
 /// Which subresource of each target the views show, for callers that make their own views
 /// (the host Vulkan path: any mip, one layer of an array image). The public path is mip 0 of
 /// a single-layer texture: wgpu does not tell a view's mip.
@@ -648,6 +675,7 @@ impl Renderer {
                 scene_depth,
                 &fresh.clouds.view,
                 &fresh.depth.view,
+                &sized.fresh_stats.view,
                 match &self.shadow {
                     Some(p) => (&p.view, &p.sampling),
                     None => (&self.no_shadow.view, &self.no_shadow.sampling),
@@ -831,6 +859,42 @@ impl Renderer {
         Ok(crate::CloudQuery::new(data, camera))
     }
 
+    /// The per-frame outputs of `view`'s last encoded frame (the cloud image, its depths and
+    /// the shadow map); an error for an unknown view or before its first frame. Valid for
+    /// passes recorded after that `encode_view`, until the next one.
+    pub fn frame_outputs(&self, view: ViewId) -> Result<FrameOutputs<'_>> {
+        let (clouds, depth, grid) = self
+            .cloud_image(view)
+            .ok_or_else(|| invalid_target("output", "this view has not rendered a frame yet"))?;
+        Ok(FrameOutputs {
+            version: FRAME_OUTPUTS_VERSION,
+            grid,
+            clouds: &clouds.view,
+            depth: &depth.view,
+            shadows: self.cloud_shadows(),
+        })
+    }
+
+    /// A view's resolved (or, with temporal reprojection off, fresh) cloud image.
+    fn cloud_image(
+        &self,
+        view: ViewId,
+    ) -> Option<(
+        &crate::gpu::temporal::Target,
+        &crate::gpu::temporal::Target,
+        (u32, u32),
+    )> {
+        let v = self.views.get(view).ok()?;
+        v.history.layout?;
+        let s = v.sized.as_ref()?;
+        let image = if v.history.resolved {
+            &s.history[v.history.current]
+        } else {
+            &s.fresh
+        };
+        Some((&image.clouds, &image.depth, s.grid))
+    }
+
     /// The cloud shadow map, once a frame of the default view has been encoded with
     /// `settings.shadows.enabled`; `None` otherwise. The map follows the default view's
     /// camera and is updated in that view's `encode` (before the march, in the same encoder):
@@ -926,14 +990,8 @@ impl Renderer {
     /// The clouds the last encoded view composited, on the trace grid: RGBA16F with rgb = L,
     /// a = T; and RGBA32F (cloud depth, scene distance, samples held, -).
     pub(crate) fn march_textures(&self) -> Option<(&wgpu::Texture, &wgpu::Texture)> {
-        let v = self.views.get(self.last_view).ok()?;
-        let s = v.sized.as_ref()?;
-        let image = if v.history.resolved {
-            &s.history[v.history.current]
-        } else {
-            &s.fresh
-        };
-        Some((&image.clouds.texture, &image.depth.texture))
+        let (clouds, depth, _) = self.cloud_image(self.last_view)?;
+        Some((&clouds.texture, &depth.texture))
     }
 
     /// The last encoded view's sparse march depth (cloud depth, scene distance, density
@@ -941,7 +999,7 @@ impl Renderer {
     pub(crate) fn fresh_samples(&self) -> Option<(&wgpu::Texture, TraceLayout)> {
         let v = self.views.get(self.last_view).ok()?;
         let s = v.sized.as_ref()?;
-        Some((&s.fresh.depth.texture, v.history.layout?))
+        Some((&s.fresh_stats.texture, v.history.layout?))
     }
 }
 

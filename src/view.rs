@@ -6,7 +6,7 @@
 use crate::error::{Error, Result};
 use crate::gpu::composite::CompositeUniforms;
 use crate::gpu::march::MarchUniforms;
-use crate::gpu::temporal::{CloudImage, TemporalUniforms};
+use crate::gpu::temporal::{CloudImage, Target, TemporalUniforms};
 use crate::settings::Settings;
 
 /// A view of a [`crate::Renderer`]: its own camera history and trace-grid textures. Made by
@@ -52,6 +52,8 @@ pub(crate) struct SizedTextures {
     pub grid: (u32, u32),
     /// This frame's march: one texel per traced pixel (the grid divided by the block edge).
     pub fresh: CloudImage,
+    /// The march's per-ray counters (density samples, light samples), RG32F, like `fresh`.
+    pub fresh_stats: Target,
     /// The resolved grid, ping-pong (this frame's and last frame's); empty with temporal off.
     pub history: Vec<CloudImage>,
 }
@@ -159,6 +161,12 @@ impl ViewState {
             key,
             grid,
             fresh: CloudImage::new(device, "march", sparse),
+            fresh_stats: Target::new(
+                device,
+                "nimbus march counters",
+                sparse,
+                wgpu::TextureFormat::Rg32Float,
+            ),
             history,
         });
         self.history = History::default();
@@ -181,6 +189,7 @@ impl ViewState {
             for image in std::iter::once(&s.fresh).chain(&s.history) {
                 total += texture_bytes(&image.clouds.texture) + texture_bytes(&image.depth.texture);
             }
+            total += texture_bytes(&s.fresh_stats.texture);
         }
         total
     }

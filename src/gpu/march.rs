@@ -384,6 +384,7 @@ impl MarchPipeline {
                     storage_entry(8, wgpu::TextureFormat::Rgba32Float),
                     texture_entry(10, S::Float { filterable: true }, D::D2),
                     params_entry::<ShadowSampling>(11),
+                    storage_entry(12, wgpu::TextureFormat::Rg32Float),
                 ],
             ]
             .concat(),
@@ -407,6 +408,7 @@ impl MarchPipeline {
         scene_depth: &wgpu::TextureView,
         march_out: &wgpu::TextureView,
         depth_out: &wgpu::TextureView,
+        stats_out: &wgpu::TextureView,
         shadow: (&wgpu::TextureView, &wgpu::Buffer),
         size: (u32, u32),
         timer: Option<&super::timing::GpuTimer>,
@@ -418,7 +420,7 @@ impl MarchPipeline {
         let mut views = medium_views(noise, weather).to_vec();
         // The shadow buffer belongs to the shadow view's pass (or is the renderer's stand-in
         // with its stand-in view): the view alone keys it.
-        views.extend([scene_depth, march_out, depth_out, shadow.0]);
+        views.extend([scene_depth, march_out, depth_out, stats_out, shadow.0]);
         let layout = &self.layout;
         let bind = self.binds.get(uniforms, &views, || {
             let mut entries = medium_entries(uniforms, noise, weather);
@@ -427,6 +429,7 @@ impl MarchPipeline {
                 tex(7, march_out),
                 tex(8, depth_out),
                 tex(10, shadow.0),
+                tex(12, stats_out),
                 wgpu::BindGroupEntry {
                     binding: 11,
                     resource: shadow.1.as_entire_binding(),

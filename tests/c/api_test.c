@@ -84,6 +84,11 @@ PIN_OFFSET(NimbusCloudShadowsExt, extent, 16);
 PIN_OFFSET(NimbusCloudShadowsExt, resolution, 20);
 PIN_OFFSET(NimbusCloudShadowsExt, steps, 24);
 PIN_OFFSET(NimbusCloudShadowsExt, update_slices, 28);
+PIN_SIZE(NimbusFrameOutputs, 24);
+PIN_OFFSET(NimbusFrameOutputs, version, 8);
+PIN_OFFSET(NimbusFrameOutputs, grid_width, 12);
+PIN_OFFSET(NimbusFrameOutputs, grid_height, 16);
+PIN_OFFSET(NimbusFrameOutputs, has_cloud_shadows, 20);
 PIN_SIZE(NimbusCloudShadowInfo, 104);
 PIN_OFFSET(NimbusCloudShadowInfo, world_to_map, 8);
 PIN_OFFSET(NimbusCloudShadowInfo, sun, 72);
@@ -367,6 +372,40 @@ static void test_cloud_shadows(void) {
     }
     TRUE(bad == 0);
     free(texels);
+
+    /* The frame outputs: version, grid, and per grid pixel (T, front depth, depth, 0). */
+    {
+        NimbusFrameOutputs fo;
+        uint32_t view = 0;
+        float *px;
+        memset(&fo, 0, sizeof fo);
+        EXPECT(nimbus_context_frame_outputs(NULL, NIMBUS_VIEW_DEFAULT, &fo), NIMBUS_ERROR_NULL_POINTER);
+        EXPECT_ON(ctx, nimbus_context_frame_outputs(ctx, NIMBUS_VIEW_DEFAULT, NULL), NIMBUS_ERROR_NULL_POINTER);
+        EXPECT_MSG(ctx, nimbus_context_frame_outputs(ctx, 0xdeadbeefu, &fo), NIMBUS_ERROR_INVALID_ARGUMENT, "view");
+        EXPECT_ON(ctx, nimbus_context_create_view(ctx, &view), NIMBUS_OK);
+        EXPECT_MSG(ctx, nimbus_context_frame_outputs(ctx, view, &fo), NIMBUS_ERROR_NOT_READY, "not rendered");
+        EXPECT_ON(ctx, nimbus_context_destroy_view(ctx, view), NIMBUS_OK);
+        fo.next = &unknown;
+        EXPECT_ON(ctx, nimbus_context_frame_outputs(ctx, NIMBUS_VIEW_DEFAULT, &fo), NIMBUS_ERROR_UNKNOWN_STRUCT);
+        fo.next = NULL;
+        EXPECT_ON(ctx, nimbus_context_frame_outputs(ctx, NIMBUS_VIEW_DEFAULT, &fo), NIMBUS_OK);
+        TRUE(fo.version == NIMBUS_FRAME_OUTPUTS_VERSION && fo.has_cloud_shadows == 1);
+        TRUE(fo.grid_width > 0 && fo.grid_width <= W && fo.grid_height > 0 && fo.grid_height <= H);
+        count = 4 * (size_t)fo.grid_width * fo.grid_height;
+        px = malloc(count * sizeof *px);
+        if (!px) return;
+        EXPECT_MSG(ctx, nimbus_context_read_frame_outputs(ctx, NIMBUS_VIEW_DEFAULT, px, count + 4), NIMBUS_ERROR_INVALID_TARGET, "float_count");
+        EXPECT(nimbus_context_read_frame_outputs(ctx, NIMBUS_VIEW_DEFAULT, NULL, count), NIMBUS_ERROR_NULL_POINTER);
+        EXPECT_ON(ctx, nimbus_context_read_frame_outputs(ctx, NIMBUS_VIEW_DEFAULT, px, count), NIMBUS_OK);
+        bad = 0;
+        for (i = 0; i < count / 4; i++) {
+            float t = px[4 * i], front = px[4 * i + 1], d = px[4 * i + 2];
+            /* T in [0, 1]; no cloud means no depths; a cloud's front is not behind its depth. */
+            if (!(t >= 0.0f && t <= 1.0f) || (d == 0.0f) != (front == 0.0f) || front > d + 1.0f) bad++;
+        }
+        TRUE(bad == 0);
+        free(px);
+    }
 }
 
 /* Since ABI 0.5: CPU queries, from two threads at once. */
