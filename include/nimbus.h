@@ -95,6 +95,11 @@
 #define NIMBUS_ABI_VERSION ((NIMBUS_VERSION_MAJOR << 16) | NIMBUS_VERSION_MINOR)
 
 /*
+ The per-frame output contract's version (`NimbusFrameOutputs.version`). Since ABI 0.5.
+ */
+#define NIMBUS_FRAME_OUTPUTS_VERSION 1
+
+/*
  `s_type` of `NimbusCloudShadowsExt` (chain it to `NimbusContextDesc.next`). Since ABI 0.5.
  */
 #define NIMBUS_STYPE_CLOUD_SHADOWS 6
@@ -104,11 +109,6 @@
  sun from the map (a few light samples next to each cloud sample, then the map). Since ABI 0.5.
  */
 #define NIMBUS_CLOUD_SHADOWS_MARCH_LIGHT 1
-
-/*
- The per-frame output contract's version (`NimbusFrameOutputs.version`). Since ABI 0.5.
- */
-#define NIMBUS_FRAME_OUTPUTS_VERSION 1
 
 /*
  `s_type` of `NimbusSettingsExt` (chain it to `NimbusContextDesc.next`).
@@ -628,6 +628,33 @@ typedef struct NimbusWeatherState {
 typedef void (*NimbusLogCallback)(int32_t level, const char *message, void *user_data);
 
 /*
+ A view's per-frame outputs besides the picture (contract version
+ `NIMBUS_FRAME_OUTPUTS_VERSION`; docs/frame-outputs.md). Since ABI 0.5.
+ */
+typedef struct NimbusFrameOutputs {
+  /*
+   Must be NULL.
+   */
+  const struct NimbusChainedStruct *next;
+  /*
+   `NIMBUS_FRAME_OUTPUTS_VERSION` of the library that wrote it.
+   */
+  uint32_t version;
+  /*
+   The cloud image's size: the viewport divided by the trace resolution's divisor.
+   */
+  uint32_t grid_width;
+  /*
+   See `grid_width`.
+   */
+  uint32_t grid_height;
+  /*
+   1 when the context keeps a cloud shadow map (`nimbus_context_cloud_shadows`), else 0.
+   */
+  uint32_t has_cloud_shadows;
+} NimbusFrameOutputs;
+
+/*
  Where the cloud shadow map stands after the last frame of the default view. Since ABI 0.5.
  */
 typedef struct NimbusCloudShadowInfo {
@@ -664,33 +691,6 @@ typedef struct NimbusCloudShadowInfo {
    */
   uint32_t reserved;
 } NimbusCloudShadowInfo;
-
-/*
- A view's per-frame outputs besides the picture (contract version
- `NIMBUS_FRAME_OUTPUTS_VERSION`; docs/frame-outputs.md). Since ABI 0.5.
- */
-typedef struct NimbusFrameOutputs {
-  /*
-   Must be NULL.
-   */
-  const struct NimbusChainedStruct *next;
-  /*
-   `NIMBUS_FRAME_OUTPUTS_VERSION` of the library that wrote it.
-   */
-  uint32_t version;
-  /*
-   The cloud image's size: the viewport divided by the trace resolution's divisor.
-   */
-  uint32_t grid_width;
-  /*
-   See `grid_width`.
-   */
-  uint32_t grid_height;
-  /*
-   1 when the context keeps a cloud shadow map (`nimbus_context_cloud_shadows`), else 0.
-   */
-  uint32_t has_cloud_shadows;
-} NimbusFrameOutputs;
 
 /*
  How to create a texture.
@@ -1246,6 +1246,30 @@ NimbusResult nimbus_set_log_callback(NimbusLogCallback callback,
                                      int32_t max_level);
 
 /*
+ Writes what `view`'s last frame left besides the picture to `*out`: the contract version,
+ the cloud image's grid size, whether a shadow map exists. `NIMBUS_ERROR_NOT_READY` before
+ the view's first frame; `NIMBUS_ERROR_INVALID_ARGUMENT` for an unknown view. Since ABI 0.5.
+
+ Safety: `ctx` NULL or live; `out` NULL or writable.
+ */
+NimbusResult nimbus_context_frame_outputs(struct NimbusContext *ctx,
+                                          uint32_t view,
+                                          struct NimbusFrameOutputs *out);
+
+/*
+ Copies `view`'s cloud image to `out`: `float_count` must be 4 × grid_width × grid_height
+ (from `nimbus_context_frame_outputs`), filled row by row with (transmittance, front depth
+ in m, representative depth in m, 0) per grid pixel; depths are 0 where the ray met no
+ cloud. Waits for the GPU. Since ABI 0.5.
+
+ Safety: `ctx` NULL or live; `out` NULL or writable for `float_count` floats.
+ */
+NimbusResult nimbus_context_read_frame_outputs(struct NimbusContext *ctx,
+                                               uint32_t view,
+                                               float *out,
+                                               size_t float_count);
+
+/*
  Makes a CPU query that answers as the context renders: the cloud density at a point, the
  transmittance along a segment, the coverage above a point, at any host time, transitions
  included, until the next weather request or settings change (make a new one then; the
@@ -1335,30 +1359,6 @@ NimbusResult nimbus_context_cloud_shadows(struct NimbusContext *ctx,
  Safety: `ctx` NULL or live; `out` NULL or writable for `float_count` floats.
  */
 NimbusResult nimbus_context_read_cloud_shadows(struct NimbusContext *ctx,
-                                               float *out,
-                                               size_t float_count);
-
-/*
- Writes what `view`'s last frame left besides the picture to `*out`: the contract version,
- the cloud image's grid size, whether a shadow map exists. `NIMBUS_ERROR_NOT_READY` before
- the view's first frame; `NIMBUS_ERROR_INVALID_ARGUMENT` for an unknown view. Since ABI 0.5.
-
- Safety: `ctx` NULL or live; `out` NULL or writable.
- */
-NimbusResult nimbus_context_frame_outputs(struct NimbusContext *ctx,
-                                          uint32_t view,
-                                          struct NimbusFrameOutputs *out);
-
-/*
- Copies `view`'s cloud image to `out`: `float_count` must be 4 × grid_width × grid_height
- (from `nimbus_context_frame_outputs`), filled row by row with (transmittance, front depth
- in m, representative depth in m, 0) per grid pixel; depths are 0 where the ray met no
- cloud. Waits for the GPU. Since ABI 0.5.
-
- Safety: `ctx` NULL or live; `out` NULL or writable for `float_count` floats.
- */
-NimbusResult nimbus_context_read_frame_outputs(struct NimbusContext *ctx,
-                                               uint32_t view,
                                                float *out,
                                                size_t float_count);
 

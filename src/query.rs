@@ -97,13 +97,9 @@ fn smoothstep(e0: f32, e1: f32, x: f32) -> f32 {
     t * t * (3.0 - 2.0 * t)
 }
 
-/// `wrapped` of shaders' wind offsets (src/gpu/march.rs): the same f32 values.
+/// The wind offset as the march's uniforms carry it (wrapped to a tile): the same f32 values.
 fn wrapped(offset: DVec2, tile: f32) -> Vec2 {
-    let t = tile as f64;
-    Vec2::new(
-        (-offset.x).rem_euclid(t) as f32,
-        (-offset.y).rem_euclid(t) as f32,
-    )
+    Vec2::from_array(crate::gpu::march::wrapped(offset, tile))
 }
 
 fn check_point(name: &str, p: Vec3) -> Result<()> {

@@ -14,6 +14,7 @@
 
 mod context;
 mod log;
+mod outputs;
 mod query;
 mod result;
 mod shadows;
@@ -30,6 +31,7 @@ use std::sync::Once;
 
 pub use context::*;
 pub use log::*;
+pub use outputs::*;
 pub use query::*;
 pub use result::NimbusResult::{self, *};
 pub use result::*;

@@ -156,16 +156,7 @@ pub unsafe extern "C" fn nimbus_context_read_cloud_shadows(
             }
             let (device, queue) = (inner.device.clone(), inner.queue.clone());
             let map = inner.renderer_mut().cloud_shadows().ok_or_else(not_ready)?;
-            let want = 4 * (map.resolution as usize).pow(2);
-            if float_count != want {
-                return Err(FfiError::new(
-                    NIMBUS_ERROR_INVALID_TARGET,
-                    format!(
-                        "float_count is {float_count}; the {n}x{n} map needs 4 x {n} x {n} = {want}",
-                        n = map.resolution
-                    ),
-                ));
-            }
+            let want = check_float_count(float_count, (map.resolution, map.resolution), "map")?;
             let bytes = read_texture(&device, &queue, map.texture, 0)?;
             inner.take_device_errors()?;
             let floats = read_halfs(&bytes);
@@ -176,6 +167,26 @@ pub unsafe extern "C" fn nimbus_context_read_cloud_shadows(
     }
 }
 
+/// The float count a 4-float-per-texel copy of a `size` image needs, or the error naming it.
+pub(crate) fn check_float_count(
+    float_count: usize,
+    size: (u32, u32),
+    what: &str,
+) -> Result<usize, FfiError> {
+    let want = 4 * size.0 as usize * size.1 as usize;
+    if float_count == want {
+        return Ok(want);
+    }
+    Err(FfiError::new(
+        NIMBUS_ERROR_INVALID_TARGET,
+        format!(
+            "float_count is {float_count}; the {w}x{h} {what} needs 4 x {w} x {h} = {want}",
+            w = size.0,
+            h = size.1
+        ),
+    ))
+}
+
 fn read_halfs(bytes: &[u8]) -> Vec<f32> {
     bytes
         .chunks_exact(2)
@@ -183,122 +194,11 @@ fn read_halfs(bytes: &[u8]) -> Vec<f32> {
         .collect()
 }
 
-/// A view's per-frame outputs besides the picture (contract version
-/// `NIMBUS_FRAME_OUTPUTS_VERSION`; docs/frame-outputs.md). Since ABI 0.5.
-#[repr(C)]
-#[derive(Clone, Copy, Debug)]
-pub struct NimbusFrameOutputs {
-    /// Must be NULL.
-    pub next: *const NimbusChainedStruct,
-    /// `NIMBUS_FRAME_OUTPUTS_VERSION` of the library that wrote it.
-    pub version: u32,
-    /// The cloud image's size: the viewport divided by the trace resolution's divisor.
-    pub grid_width: u32,
-    /// See `grid_width`.
-    pub grid_height: u32,
-    /// 1 when the context keeps a cloud shadow map (`nimbus_context_cloud_shadows`), else 0.
-    pub has_cloud_shadows: u32,
-}
-
-/// The per-frame output contract's version (`NimbusFrameOutputs.version`). Since ABI 0.5.
-pub const NIMBUS_FRAME_OUTPUTS_VERSION: u32 = 1;
-
-/// Writes what `view`'s last frame left besides the picture to `*out`: the contract version,
-/// the cloud image's grid size, whether a shadow map exists. `NIMBUS_ERROR_NOT_READY` before
-/// the view's first frame; `NIMBUS_ERROR_INVALID_ARGUMENT` for an unknown view. Since ABI 0.5.
-///
-/// Safety: `ctx` NULL or live; `out` NULL or writable.
-#[no_mangle]
-pub unsafe extern "C" fn nimbus_context_frame_outputs(
-    ctx: *mut NimbusContext,
-    view: u32,
-    out: *mut NimbusFrameOutputs,
-) -> NimbusResult {
-    // SAFETY: the caller guarantees a live context or NULL, and `out` writable or NULL.
-    unsafe {
-        with_ctx(ctx, |inner| {
-            let out = out.as_mut().ok_or_else(|| FfiError::null("out"))?;
-            check_chain(out.next, &[])?;
-            let outputs = frame_outputs(inner, view)?;
-            *out = NimbusFrameOutputs {
-                next: out.next,
-                version: outputs.version,
-                grid_width: outputs.grid.0,
-                grid_height: outputs.grid.1,
-                has_cloud_shadows: outputs.shadows.is_some() as u32,
-            };
-            Ok(NIMBUS_OK)
-        })
-    }
-}
-
-fn frame_outputs(
-    inner: &mut super::context::ContextInner,
-    view: u32,
-) -> Result<crate::FrameOutputs<'_>, FfiError> {
-    let id = crate::ViewId::from_raw(view);
-    let renderer = inner.renderer_mut();
-    // An unknown view is the caller's mistake; a known one without a frame is not ready.
-    renderer.view_memory_bytes(id)?;
-    renderer.frame_outputs(id).map_err(|_| {
-        FfiError::new(
-            NIMBUS_ERROR_NOT_READY,
-            "this view has not rendered a frame yet",
-        )
-    })
-}
-
-/// Copies `view`'s cloud image to `out`: `float_count` must be 4 × grid_width × grid_height
-/// (from `nimbus_context_frame_outputs`), filled row by row with (transmittance, front depth
-/// in m, representative depth in m, 0) per grid pixel; depths are 0 where the ray met no
-/// cloud. Waits for the GPU. Since ABI 0.5.
-///
-/// Safety: `ctx` NULL or live; `out` NULL or writable for `float_count` floats.
-#[no_mangle]
-pub unsafe extern "C" fn nimbus_context_read_frame_outputs(
-    ctx: *mut NimbusContext,
-    view: u32,
-    out: *mut f32,
-    float_count: usize,
-) -> NimbusResult {
-    // SAFETY: the caller guarantees a live context or NULL.
-    unsafe {
-        with_ctx(ctx, |inner| {
-            if out.is_null() {
-                return Err(FfiError::null("out"));
-            }
-            let (device, queue) = (inner.device.clone(), inner.queue.clone());
-            let outputs = frame_outputs(inner, view)?;
-            let want = 4 * outputs.grid.0 as usize * outputs.grid.1 as usize;
-            if float_count != want {
-                return Err(FfiError::new(
-                    NIMBUS_ERROR_INVALID_TARGET,
-                    format!(
-                        "float_count is {float_count}; the {}x{} cloud image needs 4 x {} x {} = {want}",
-                        outputs.grid.0, outputs.grid.1, outputs.grid.0, outputs.grid.1
-                    ),
-                ));
-            }
-            let pixels = crate::headless::read_outputs(&device, &queue, &outputs)?;
-            inner.take_device_errors()?;
-            // SAFETY: the caller guarantees room for float_count (= want) floats.
-            std::slice::from_raw_parts_mut(out, want)
-                .copy_from_slice(bytemuck::cast_slice(&pixels));
-            Ok(NIMBUS_OK)
-        })
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     /// Released with ABI 0.5: the sizes and offsets a C compiler must agree on.
-    #[test]
-    fn the_c_contract_version_is_the_rust_one() {
-        assert_eq!(NIMBUS_FRAME_OUTPUTS_VERSION, crate::FRAME_OUTPUTS_VERSION);
-    }
-
     #[test]
     fn cloud_shadow_layouts_are_pinned() {
         use std::mem::{offset_of, size_of};
@@ -316,10 +216,5 @@ mod tests {
         assert_eq!(offset_of!(NimbusCloudShadowInfo, window_origin), 88);
         assert_eq!(offset_of!(NimbusCloudShadowInfo, extent), 96);
         assert_eq!(offset_of!(NimbusCloudShadowInfo, reserved), 100);
-        assert_eq!(size_of::<NimbusFrameOutputs>(), 24);
-        assert_eq!(offset_of!(NimbusFrameOutputs, version), 8);
-        assert_eq!(offset_of!(NimbusFrameOutputs, grid_width), 12);
-        assert_eq!(offset_of!(NimbusFrameOutputs, grid_height), 16);
-        assert_eq!(offset_of!(NimbusFrameOutputs, has_cloud_shadows), 20);
     }
 }

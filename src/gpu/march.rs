@@ -70,7 +70,7 @@ pub(crate) fn tangent_basis(up: Vec3) -> (Vec3, Vec3) {
 
 /// A wind displacement wrapped to one tile, so f32 keeps its precision forever. Textures are
 /// sampled at p - displacement, so cloud features travel along the wind.
-fn wrapped(offset: DVec2, tile: f32) -> [f32; 2] {
+pub(crate) fn wrapped(offset: DVec2, tile: f32) -> [f32; 2] {
     let t = tile as f64;
     [
         (-offset.x).rem_euclid(t) as f32,
