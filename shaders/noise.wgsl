@@ -1,8 +1,12 @@
 // Tileable procedural noise on the unit cube: every function below is periodic with period 1
 // in x, y and z, because lattice and cell indices wrap modulo the frequency.
 
+// Callers pass cells within one period of the tile, c in [-period, 2 period): two selects
+// give the same answer as ((c % period) + period) % period without an integer division
+// (which software rasterisers run lane by lane).
 fn wrap_cell(c: vec3i, period: vec3i) -> vec3i {
-    return ((c % period) + period) % period;
+    let up = select(c, c + period, c < vec3i(0));
+    return select(up, up - period, up >= period);
 }
 
 // Perlin 2002 fade: 6t^5 - 15t^4 + 10t^3.
@@ -10,26 +14,23 @@ fn fade(t: vec3f) -> vec3f {
     return t * t * t * (t * (t * 6.0 - 15.0) + 10.0);
 }
 
-// Perlin 2002 gradient set: the 12 edge directions of a cube.
+// Perlin 2002 gradient set: the 12 edge directions of a cube, hash % 12 picking
+// (x+y, -x+y, x-y, -x-y, x+z, -x+z, x-z, -x-z, y+z, -y+z, y-z, -y-z). Written with selects
+// instead of a switch: a software rasteriser runs a divergent switch case by case.
 fn grad_dot(hash: u32, d: vec3f) -> f32 {
-    switch (hash % 12u) {
-        case 0u: { return d.x + d.y; }
-        case 1u: { return -d.x + d.y; }
-        case 2u: { return d.x - d.y; }
-        case 3u: { return -d.x - d.y; }
-        case 4u: { return d.x + d.z; }
-        case 5u: { return -d.x + d.z; }
-        case 6u: { return d.x - d.z; }
-        case 7u: { return -d.x - d.z; }
-        case 8u: { return d.y + d.z; }
-        case 9u: { return -d.y + d.z; }
-        case 10u: { return d.y - d.z; }
-        default: { return -d.y - d.z; }
-    }
+    let h = hash % 12u;
+    let u = select(d.y, d.x, h < 8u);
+    let v = select(d.z, d.y, h < 4u);
+    return select(u, -u, (h & 1u) != 0u) + select(v, -v, (h & 2u) != 0u);
 }
 
 fn lattice_hash(c: vec3i, period: vec3i, seed: u32) -> u32 {
     return pcg3d(bitcast<vec3u>(wrap_cell(c, period)) ^ vec3u(seed, seed * 7919u, seed * 104729u)).x;
+}
+
+// One lattice corner's gradient term: the corner at cell i + o, seen from the point at f.
+fn perlin_corner(i: vec3i, f: vec3f, o: vec3i, freq: vec3i, seed: u32) -> f32 {
+    return grad_dot(lattice_hash(i + o, freq, seed), f - vec3f(o));
 }
 
 // Improved Perlin noise with `freq` lattice cells per unit along each axis, in [-1, 1] (about).
@@ -38,15 +39,12 @@ fn perlin3(p_unit: vec3f, freq: vec3i, seed: u32) -> f32 {
     let i = vec3i(floor(p));
     let f = p - floor(p);
     let u = fade(f);
-    var corners: array<f32, 8>;
-    for (var k = 0; k < 8; k++) {
-        let o = vec3i(k & 1, (k >> 1) & 1, (k >> 2) & 1);
-        corners[k] = grad_dot(lattice_hash(i + o, freq, seed), f - vec3f(o));
-    }
-    let x00 = mix(corners[0], corners[1], u.x);
-    let x10 = mix(corners[2], corners[3], u.x);
-    let x01 = mix(corners[4], corners[5], u.x);
-    let x11 = mix(corners[6], corners[7], u.x);
+    // The eight corners by name, not in an indexed array (which lives in scratch memory
+    // on software rasterisers).
+    let x00 = mix(perlin_corner(i, f, vec3i(0, 0, 0), freq, seed), perlin_corner(i, f, vec3i(1, 0, 0), freq, seed), u.x);
+    let x10 = mix(perlin_corner(i, f, vec3i(0, 1, 0), freq, seed), perlin_corner(i, f, vec3i(1, 1, 0), freq, seed), u.x);
+    let x01 = mix(perlin_corner(i, f, vec3i(0, 0, 1), freq, seed), perlin_corner(i, f, vec3i(1, 0, 1), freq, seed), u.x);
+    let x11 = mix(perlin_corner(i, f, vec3i(0, 1, 1), freq, seed), perlin_corner(i, f, vec3i(1, 1, 1), freq, seed), u.x);
     return mix(mix(x00, x10, u.y), mix(x01, x11, u.y), u.z);
 }
 
@@ -76,17 +74,27 @@ fn perlin_fbm(p: vec3f, freq: i32, octaves: i32, persistence: f32, seed: u32) ->
 
 // Inverted Worley F1 with wrapped cells (one feature point per cell): 1 at feature points,
 // falling to 0 a cell away. Billowy rather than cellular (Aetherius, "Worley Noise").
+// A cell's feature point lies inside the cell, so a neighbour whose nearest face is already
+// farther than the best distance found cannot win: skipping it gives the same minimum (a
+// branch-and-bound search, seeded with the point's own cell).
 fn worley(p_unit: vec3f, freq: i32, seed: u32) -> f32 {
     let p = p_unit * f32(freq);
     let cell = vec3i(floor(p));
-    var best = 1e9;
+    let f = p - vec3f(cell);
+    let period = vec3i(freq);
+    let own = p - (vec3f(cell) + hash33(wrap_cell(cell, period), seed));
+    var best = dot(own, own);
     for (var z = -1; z <= 1; z++) {
         for (var y = -1; y <= 1; y++) {
             for (var x = -1; x <= 1; x++) {
-                let c = cell + vec3i(x, y, z);
-                let feature = vec3f(c) + hash33(wrap_cell(c, vec3i(freq)), seed);
-                let d = p - feature;
-                best = min(best, dot(d, d));
+                let o = vec3i(x, y, z);
+                // Distance from p to the neighbour cell's box, per axis.
+                let gap = select(vec3f(0.0), select(1.0 - f, f, o < vec3i(0)), o != vec3i(0));
+                if (dot(gap, gap) < best) {
+                    let c = cell + o;
+                    let d = p - (vec3f(c) + hash33(wrap_cell(c, period), seed));
+                    best = min(best, dot(d, d));
+                }
             }
         }
     }
