@@ -2,11 +2,13 @@
 //! pass (timestamp queries; wall time beside it), rays traced, GPU memory, and the error of
 //! every image against a converged reference of the same scene and time (FLIP mean and 99th
 //! percentile). Also: cost against pixel count, the cost of a weather bake, a short
-//! moving-camera flight, and several cameras on one renderer (a stereo pair, a cube probe). Writes bench.csv, bench.md and chart.png into the output folder.
+//! moving-camera flight, several cameras on one renderer (a stereo pair, a cube probe), and the
+//! start-up time, cold and from a noise cache. Writes bench.csv, bench.md and chart.png into the output folder.
 //!
 //! Usage: cargo run --release --example bench -- [--quick] [--out DIR]
 //!        cargo run --release --example bench -- --from-csv DIR/bench.csv   (re-draw from a run)
 //!        cargo run --release --example bench -- [--quick] --views-only     (the views section)
+//!        cargo run --release --example bench -- --start-only               (the start section)
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -17,6 +19,8 @@ use nimbus::glam::Vec3;
 use nimbus::settings::{MultipleScatteringModel, Quality, Temporal, TraceResolution};
 use nimbus::{Headless, Settings, Weather};
 
+#[path = "bench_start.rs"]
+mod bench_start;
 #[path = "bench_views.rs"]
 mod bench_views;
 
@@ -554,6 +558,11 @@ fn run() -> Result<(), String> {
     while let Some(a) = args.next() {
         match a.as_str() {
             "--quick" => quick = true,
+            "--start-only" => {
+                // Only the start-up section (printed).
+                bench_start::start_section()?;
+                return Ok(());
+            }
             "--views-only" => {
                 // Only the several-cameras section (printed).
                 bench_views::views_section(quick)?;
@@ -578,7 +587,7 @@ fn run() -> Result<(), String> {
             }
             _ => {
                 return Err(format!(
-                "unexpected argument {a:?}; usage: bench [--quick] [--out DIR] | --from-csv FILE"
+                "unexpected argument {a:?}; usage: bench [--quick] [--out DIR] [--views-only | --start-only] | --from-csv FILE"
             ))
             }
         }
@@ -731,6 +740,7 @@ fn run() -> Result<(), String> {
         );
     }
     md.push_str(&bench_views::views_section(quick)?);
+    md.push_str(&bench_start::start_section()?);
     let _ = writeln!(md, "\nEvery configuration: `bench.csv`. Chart: `chart.png` (one bar per row of the CSV, in order, log scale with a grey line per decade from 1 ms; green low, blue medium, orange high, red ultra, grey the ablation).");
     std::fs::write(out.join("bench.md"), &md).map_err(|e| e.to_string())?;
     println!(

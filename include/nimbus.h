@@ -74,7 +74,7 @@
 /*
  Minor version.
  */
-#define NIMBUS_VERSION_MINOR 5
+#define NIMBUS_VERSION_MINOR 6
 
 /*
  Patch version.
@@ -93,6 +93,20 @@
  newer header (which may use structs this library does not know) is refused, and so is 0.
  */
 #define NIMBUS_ABI_VERSION ((NIMBUS_VERSION_MAJOR << 16) | NIMBUS_VERSION_MINOR)
+
+/*
+ `s_type` of `NimbusNoiseCacheExt` (chain it to `NimbusContextDesc.next`). Since ABI 0.6.
+ */
+#define NIMBUS_STYPE_NOISE_CACHE 7
+
+/*
+ `NimbusNoiseCacheExt.flags`: a cache that cannot serve this context (damaged, written by a
+ library with another noise bake, or for another seed or volume size) is ignored with a
+ warning in the log and the volumes are baked, instead of failing the creation with
+ `NIMBUS_ERROR_NOISE_CACHE`. `nimbus_context_noise_from_cache` tells which happened.
+ Since ABI 0.6.
+ */
+#define NIMBUS_NOISE_CACHE_FALLBACK 1
 
 /*
  The per-frame output contract's version (`NimbusFrameOutputs.version`). Since ABI 0.5.
@@ -423,6 +437,11 @@ enum NimbusResult
    rendered it yet (since ABI 0.5).
    */
   NIMBUS_ERROR_NOT_READY = -14,
+  /*
+   A noise cache is malformed, damaged, from another Nimbus bake, or holds other volumes
+   than the settings ask for (since ABI 0.6).
+   */
+  NIMBUS_ERROR_NOISE_CACHE = -15,
   /*
    A panic inside Nimbus was caught; the context is now poisoned.
    */
@@ -867,6 +886,40 @@ typedef struct NimbusVulkanTargets {
 } NimbusVulkanTargets;
 
 /*
+ The cloud shadow map's `VkImage` on the host's device, for hosts that bind or copy it with
+ their own commands. Since ABI 0.6.
+ */
+typedef struct NimbusVulkanShadowImage {
+  /*
+   Must be NULL.
+   */
+  const struct NimbusChainedStruct *next;
+  /*
+   The `VkImage` (2D, one mip, one layer). Nimbus owns it: never destroy or write it. It
+   stays valid until the context is destroyed; ask again every frame (it costs nothing).
+   */
+  uint64_t image;
+  /*
+   Its `VkFormat`: `VK_FORMAT_R16G16B16A16_SFLOAT`.
+   */
+  uint32_t format;
+  /*
+   Texels along a side (the image is square).
+   */
+  uint32_t resolution;
+  /*
+   `VkImageUsageFlags` it certainly has: `SAMPLED | STORAGE | TRANSFER_SRC`.
+   */
+  uint32_t usage;
+  /*
+   The `VkImageLayout` every `nimbus_context_render_vulkan` leaves it in, with its writes
+   made available by that call's final global barrier, and expects it back in when its
+   work runs: `VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL`.
+   */
+  uint32_t layout;
+} NimbusVulkanShadowImage;
+
+/*
  Settings extension (`s_type = NIMBUS_STYPE_SETTINGS`). Zero in any field means its default.
  */
 typedef struct NimbusSettingsExt {
@@ -1084,6 +1137,35 @@ typedef struct NimbusCloudShadowsExt {
   uint32_t reserved;
 } NimbusCloudShadowsExt;
 
+/*
+ Chained to the context's creation: the noise volumes from a cache that
+ `nimbus_context_export_noise_cache` wrote, uploaded instead of baked (most of a creation's
+ time on software Vulkan). The bytes are read during `nimbus_context_create` only; the host
+ may free them once it returns. Since ABI 0.6.
+ */
+typedef struct NimbusNoiseCacheExt {
+  /*
+   `s_type` = `NIMBUS_STYPE_NOISE_CACHE`.
+   */
+  struct NimbusChainedStruct chain;
+  /*
+   The cache's bytes.
+   */
+  const void *data;
+  /*
+   Their count (not 0).
+   */
+  size_t size;
+  /*
+   `NIMBUS_NOISE_CACHE_*` flags; 0 = none (an unusable cache fails the creation).
+   */
+  uint32_t flags;
+  /*
+   Must be 0.
+   */
+  uint32_t reserved;
+} NimbusNoiseCacheExt;
+
 
 
 
@@ -1244,6 +1326,31 @@ NimbusResult nimbus_context_reset_history(struct NimbusContext *ctx);
 NimbusResult nimbus_set_log_callback(NimbusLogCallback callback,
                                      void *user_data,
                                      int32_t max_level);
+
+/*
+ Writes the context's noise volumes as a noise cache: a host stores the bytes (a file, an
+ asset) and chains them in a `NimbusNoiseCacheExt` to later creations. With `data` NULL
+ only `*size` is written: the byte count needed (about 8.5 MB for the default volumes).
+ Otherwise `capacity` must be at least that (`NIMBUS_ERROR_INVALID_TARGET` if not, with
+ `*size` still written), and the cache is copied to `data` (waits for the GPU: call it once,
+ e.g. at exit or after a loading screen, not every frame). Since ABI 0.6.
+
+ Safety: `ctx` NULL or live; `size` NULL or writable; `data` NULL or writable for
+ `capacity` bytes.
+ */
+NimbusResult nimbus_context_export_noise_cache(struct NimbusContext *ctx,
+                                               void *data,
+                                               size_t capacity,
+                                               size_t *size);
+
+/*
+ Writes 1 to `*out` when the context's noise volumes came from a `NimbusNoiseCacheExt`, 0
+ when they were baked (no cache, a cache ignored under `NIMBUS_NOISE_CACHE_FALLBACK`, or a
+ settings change that re-baked them). Since ABI 0.6.
+
+ Safety: `ctx` NULL or live; `out` NULL or writable.
+ */
+NimbusResult nimbus_context_noise_from_cache(struct NimbusContext *ctx, uint32_t *out);
 
 /*
  Writes what `view`'s last frame left besides the picture to `*out`: the contract version,
@@ -1543,6 +1650,20 @@ NimbusResult nimbus_context_render_vulkan(struct NimbusContext *ctx,
  Safety: `ctx` NULL or live.
  */
 NimbusResult nimbus_context_release_vulkan_images(struct NimbusContext *ctx);
+
+/*
+ The cloud shadow map's `VkImage` after the last frame of the default view. Sample it (or
+ copy from it, returning it to `layout`) in commands ordered after that frame's
+ `nimbus_context_render_vulkan` and before the next one's work (on the same queue, the
+ submission order is enough); the matrix and layout are `nimbus_context_cloud_shadows`'s.
+ `NIMBUS_ERROR_INVALID_ARGUMENT` on a context not made on a host Vulkan device;
+ `NIMBUS_ERROR_NOT_READY` without `NimbusCloudShadowsExt` or before the first frame.
+ Since ABI 0.6.
+
+ Safety: `ctx` NULL or live; `out` NULL or writable.
+ */
+NimbusResult nimbus_context_cloud_shadow_vulkan_image(struct NimbusContext *ctx,
+                                                      struct NimbusVulkanShadowImage *out);
 
 #ifdef __cplusplus
 }  /* extern "C" */

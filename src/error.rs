@@ -90,6 +90,10 @@ pub enum Error {
     /// Writing or encoding an image failed.
     #[error("image output failed: {0}")]
     Image(String),
+    /// A noise cache (see [`crate::noise_cache`]) is malformed, damaged, from another noise
+    /// algorithm, or holds other volumes than the settings ask for.
+    #[error("noise cache: {0}")]
+    NoiseCache(String),
 }
 
 /// Shorthand used throughout the crate.

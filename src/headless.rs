@@ -163,11 +163,17 @@ pub(crate) fn read_outputs(
 impl Headless {
     /// Creates a device of its own and a renderer on it.
     pub fn new(settings: Settings) -> Result<Self> {
+        Self::with_noise(settings, crate::NoiseStart::Bake)
+    }
+
+    /// As [`Headless::new`], with the noise volumes from `noise` (see
+    /// [`Renderer::with_noise`]).
+    pub fn with_noise(settings: Settings, noise: crate::NoiseStart<'_>) -> Result<Self> {
         settings.validate()?;
         let (device, queue, adapter_info) = create_device()?;
         // Nothing may panic: wgpu errors outside our scopes are collected and reported.
         let errors = DeviceErrors::install(&device);
-        let renderer = Renderer::new(&device, &queue, settings)?;
+        let renderer = Renderer::with_noise(&device, &queue, settings, noise)?;
         Ok(Self {
             device,
             queue,

@@ -30,6 +30,7 @@ pub mod frame;
 mod gpu;
 pub mod headless;
 pub mod lighting;
+pub mod noise_cache;
 pub mod query;
 pub mod reference;
 pub mod renderer;
@@ -50,7 +51,8 @@ pub use headless::{Headless, LiveObjects, RayStats};
 pub use query::CloudQuery;
 pub use reference::{Orders, PathTracer};
 pub use renderer::{
-    CloudShadowMap, ColorTargets, FrameOutputs, Renderer, Targets, Viewport, FRAME_OUTPUTS_VERSION,
+    CloudShadowMap, ColorTargets, FrameOutputs, NoiseStart, Renderer, Targets, Viewport,
+    FRAME_OUTPUTS_VERSION,
 };
 pub use settings::{CloudShadows, DebugDensity, Quality, Settings, Temporal, TracePattern};
 pub use shadows::{shadow_optical_depth, CloudShadowSampler};

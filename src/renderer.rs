@@ -115,6 +115,24 @@ pub struct Renderer {
     no_shadow: NoShadow,
     /// The read-back textures CPU queries use, until the next weather or settings change.
     query_data: Option<std::sync::Arc<crate::query::QueryData>>,
+    /// Whether the noise volumes in use came from a noise cache (not baked).
+    noise_from_cache: bool,
+}
+
+/// Where a new renderer's noise volumes come from (see [`crate::noise_cache`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub enum NoiseStart<'a> {
+    /// Bake them on the GPU (what [`Renderer::new`] does).
+    #[default]
+    Bake,
+    /// Upload them from a noise cache exported by [`Renderer::export_noise_cache`]. A cache
+    /// that is damaged, from another noise algorithm (another library version) or for another
+    /// seed or size is an [`Error::NoiseCache`].
+    Cache(&'a [u8]),
+    /// Upload them from the cache when it is usable for these settings, bake them otherwise
+    /// (logging why, as a warning): what a host that ships or persists a cache wants.
+    /// [`Renderer::noise_from_cache`] says which happened.
+    CacheOrBake(&'a [u8]),
 }
 
 /// The cloud shadow map as the last frame of the default view left it: the texture, its
@@ -346,9 +364,34 @@ impl Renderer {
     /// Validates `settings`, bakes the noise volumes and weather map (submitting that work
     /// on `queue`) and builds the march pipelines.
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, settings: Settings) -> Result<Self> {
+        Self::with_noise(device, queue, settings, NoiseStart::Bake)
+    }
+
+    /// As [`Renderer::new`], with the noise volumes from `noise` (a cache skips the bake,
+    /// which is most of a creation on software Vulkan: see docs/performance.md).
+    pub fn with_noise(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        settings: Settings,
+        noise: NoiseStart<'_>,
+    ) -> Result<Self> {
         settings.validate()?;
+        let cache = match noise {
+            NoiseStart::Bake => None,
+            NoiseStart::Cache(bytes) => Some(usable_cache(bytes, &settings)?),
+            NoiseStart::CacheOrBake(bytes) => match usable_cache(bytes, &settings) {
+                Ok(c) => Some(c),
+                Err(e) => {
+                    log::warn!("{e}; baking the noise volumes instead");
+                    None
+                }
+            },
+        };
         gpu_scope(device, || {
-            let noise = NoiseTextures::new(device, queue, &settings.noise);
+            let noise = match cache {
+                Some(texels) => NoiseTextures::from_texels(device, queue, &settings.noise, texels),
+                None => NoiseTextures::new(device, queue, &settings.noise),
+            };
             let weather_maps = WeatherMaps::new(
                 device,
                 queue,
@@ -384,8 +427,30 @@ impl Renderer {
                 shadow,
                 no_shadow: NoShadow::new(device),
                 query_data: None,
+                noise_from_cache: cache.is_some(),
             }
         })
+    }
+
+    /// Whether this renderer's noise volumes came from a noise cache rather than a bake
+    /// (false again after a settings change re-baked them).
+    pub fn noise_from_cache(&self) -> bool {
+        self.noise_from_cache
+    }
+
+    /// The noise volumes in use as a noise cache ([`crate::noise_cache`]): about 8.5 MB for
+    /// the default sizes. Waits for the GPU (it reads them back): call it once, at a loading
+    /// screen or on exit, and store the bytes for [`NoiseStart::Cache`].
+    pub fn export_noise_cache(&self) -> Result<Vec<u8>> {
+        let read = |which| {
+            crate::device::read_texture(&self.device, &self.queue, self.noise.volume(which), 0)
+        };
+        let (base, detail) = (read(NoiseVolume::Base)?, read(NoiseVolume::Detail)?);
+        Ok(crate::noise_cache::encode(
+            &self.settings.noise,
+            &base,
+            &detail,
+        ))
     }
 
     /// The settings in use.
@@ -442,6 +507,7 @@ impl Renderer {
         }
         if let Some(noise) = noise {
             self.noise = noise;
+            self.noise_from_cache = false;
         }
         if let Some(maps) = maps {
             self.weather_maps = maps;
@@ -1083,4 +1149,11 @@ impl ComputePasses {
             c.clear();
         }
     }
+}
+
+/// A cache's volumes, once its header, checksum and match with `settings` are checked.
+fn usable_cache<'a>(bytes: &'a [u8], settings: &Settings) -> Result<(&'a [u8], &'a [u8])> {
+    let info = crate::noise_cache::NoiseCacheInfo::parse(bytes)?;
+    info.check_matches(&settings.noise)?;
+    Ok(crate::noise_cache::payload(bytes, &info))
 }

@@ -17,7 +17,7 @@ use crate::headless::MAX_HEADLESS_SIZE;
 use crate::renderer::{ColorTargets, Targets};
 use crate::settings::Quality;
 use crate::weather::{Preset, Weather};
-use crate::{Camera, DepthConvention, FrameInputs, Renderer, Settings, Sun};
+use crate::{Camera, DepthConvention, FrameInputs, NoiseStart, Renderer, Settings, Sun};
 
 /// An opaque Nimbus context (see `nimbus_context_create`).
 pub struct NimbusContext {
@@ -154,6 +154,7 @@ fn settings_from_chain(next: *const NimbusChainedStruct, abi_minor: u32) -> FfiR
         NIMBUS_STYPE_QUALITY,
         NIMBUS_STYPE_VULKAN_DEVICE,
         NIMBUS_STYPE_CLOUD_SHADOWS,
+        NIMBUS_STYPE_NOISE_CACHE,
     ];
     check_chain(next, &kinds)?;
     let links = links(next);
@@ -305,6 +306,24 @@ fn decode_desc(desc: &NimbusContextDesc) -> FfiResult<DecodedDesc> {
     let minor = check_abi_version(desc.abi_version)?;
     let settings = settings_from_chain(desc.next, minor)?;
     settings.validate()?;
+    let noise = match links(desc.next)
+        .into_iter()
+        .find(|(t, _)| *t == NIMBUS_STYPE_NOISE_CACHE)
+    {
+        Some(_) if minor < 6 => {
+            return Err(FfiError::new(
+                NIMBUS_ERROR_UNKNOWN_STRUCT,
+                "NimbusNoiseCacheExt needs a header of ABI 0.6 or newer",
+            ))
+        }
+        // SAFETY: the chain link is a NimbusNoiseCacheExt (its s_type) per the caller.
+        Some((_, p)) => Some(unsafe { super::noise_cache::cache_from_ext(p) }?),
+        None => None,
+    };
+    if let Some(n) = &noise {
+        // SAFETY: the header requires the cache's bytes to be readable during the creation.
+        unsafe { n.check(&settings) }?;
+    }
     // SAFETY: checked for NULL; the caller guarantees validity otherwise.
     let window = unsafe { desc.window.as_ref() };
     let vulkan = links(desc.next)
@@ -326,7 +345,12 @@ fn decode_desc(desc: &NimbusContextDesc) -> FfiResult<DecodedDesc> {
         }
         // SAFETY: the chain link is a NimbusVulkanDeviceExt (its s_type) per the caller.
         let host = unsafe { super::vulkan::host_device(&*ext) }?;
-        return Ok((settings, None, Some(host)));
+        return Ok(DecodedDesc {
+            settings,
+            target: None,
+            host: Some(host),
+            noise,
+        });
     }
     let target = match window {
         Some(w) => {
@@ -335,15 +359,22 @@ fn decode_desc(desc: &NimbusContextDesc) -> FfiResult<DecodedDesc> {
         }
         None => None,
     };
-    Ok((settings, target, None))
+    Ok(DecodedDesc {
+        settings,
+        target,
+        host: None,
+        noise,
+    })
 }
 
-/// What a creation descriptor asks for: settings, a window or the host's Vulkan device.
-type DecodedDesc = (
-    Settings,
-    Option<wgpu::SurfaceTargetUnsafe>,
-    Option<crate::vulkan::HostDevice>,
-);
+/// What a creation descriptor asks for: settings, a window or the host's Vulkan device, and
+/// where the noise volumes come from.
+struct DecodedDesc {
+    settings: Settings,
+    target: Option<wgpu::SurfaceTargetUnsafe>,
+    host: Option<crate::vulkan::HostDevice>,
+    noise: Option<super::noise_cache::NoiseCacheArg>,
+}
 
 /// A C frame as Rust frame inputs, checked as `Renderer::prepare` checks them.
 pub(crate) fn decode_frame(frame: &NimbusFrame) -> FfiResult<FrameInputs> {
@@ -409,7 +440,12 @@ pub mod fuzzing {
 
 impl ContextInner {
     fn create(desc: &NimbusContextDesc) -> FfiResult<Self> {
-        let (settings, target, host) = decode_desc(desc)?;
+        let DecodedDesc {
+            settings,
+            target,
+            host,
+            noise,
+        } = decode_desc(desc)?;
         let (device, queue, info, presenter, vulkan) = match host {
             Some(host) => {
                 // SAFETY: the header requires the host's handles to be live, consistent and to
@@ -434,7 +470,11 @@ impl ContextInner {
             }
         };
         let errors = DeviceErrors::install(&device);
-        let renderer = Renderer::new(&device, &queue, settings)?;
+        // SAFETY: the header requires the cache's bytes to be readable during this call.
+        let start = noise
+            .as_ref()
+            .map_or(NoiseStart::Bake, |n| unsafe { n.start() });
+        let renderer = Renderer::with_noise(&device, &queue, settings, start)?;
         Ok(Self {
             id: NEXT_CONTEXT_ID.fetch_add(1, Ordering::Relaxed),
             alive: Arc::new(()),

@@ -14,6 +14,7 @@
 
 mod context;
 mod log;
+mod noise_cache;
 mod outputs;
 mod query;
 mod result;
@@ -31,6 +32,7 @@ use std::sync::Once;
 
 pub use context::*;
 pub use log::*;
+pub use noise_cache::*;
 pub use outputs::*;
 pub use query::*;
 pub use result::NimbusResult::{self, *};
@@ -47,7 +49,7 @@ use crate::Error;
 /// Major version of the library; a context made with a header of another major version fails.
 pub const NIMBUS_VERSION_MAJOR: u32 = 0;
 /// Minor version.
-pub const NIMBUS_VERSION_MINOR: u32 = 5;
+pub const NIMBUS_VERSION_MINOR: u32 = 6;
 /// Patch version.
 pub const NIMBUS_VERSION_PATCH: u32 = 0;
 /// The oldest minor version of this major whose headers this library still serves.
@@ -98,6 +100,7 @@ impl From<Error> for FfiError {
                 NIMBUS_ERROR_INVALID_ARGUMENT
             }
             Error::DeviceLost(_) => NIMBUS_ERROR_DEVICE_LOST,
+            Error::NoiseCache(_) => NIMBUS_ERROR_NOISE_CACHE,
         };
         let mut message = e.to_string();
         if code == NIMBUS_ERROR_DEVICE_LOST {

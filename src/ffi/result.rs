@@ -53,6 +53,9 @@ pub enum NimbusResult {
     /// The output asked for is not there: the feature that makes it is off, or no frame has
     /// rendered it yet (since ABI 0.5).
     NIMBUS_ERROR_NOT_READY = -14,
+    /// A noise cache is malformed, damaged, from another Nimbus bake, or holds other volumes
+    /// than the settings ask for (since ABI 0.6).
+    NIMBUS_ERROR_NOISE_CACHE = -15,
     /// A panic inside Nimbus was caught; the context is now poisoned.
     NIMBUS_ERROR_PANIC = -100,
     /// The context was poisoned by an earlier panic; only nimbus_context_destroy remains.
@@ -80,6 +83,7 @@ pub(crate) const ALL_RESULTS: &[NimbusResult] = &[
     NIMBUS_ERROR_SURFACE,
     NIMBUS_ERROR_VULKAN_REQUIREMENT,
     NIMBUS_ERROR_NOT_READY,
+    NIMBUS_ERROR_NOISE_CACHE,
     NIMBUS_ERROR_PANIC,
     NIMBUS_ERROR_POISONED,
     NIMBUS_ERROR_DEVICE_LOST,
@@ -112,6 +116,7 @@ impl NimbusResult {
             NIMBUS_ERROR_SURFACE => "NIMBUS_ERROR_SURFACE\0",
             NIMBUS_ERROR_VULKAN_REQUIREMENT => "NIMBUS_ERROR_VULKAN_REQUIREMENT\0",
             NIMBUS_ERROR_NOT_READY => "NIMBUS_ERROR_NOT_READY\0",
+            NIMBUS_ERROR_NOISE_CACHE => "NIMBUS_ERROR_NOISE_CACHE\0",
             NIMBUS_ERROR_PANIC => "NIMBUS_ERROR_PANIC\0",
             NIMBUS_ERROR_POISONED => "NIMBUS_ERROR_POISONED\0",
             NIMBUS_ERROR_DEVICE_LOST => "NIMBUS_ERROR_DEVICE_LOST\0",
@@ -147,6 +152,7 @@ impl NimbusResult {
             NIMBUS_ERROR_NOT_READY => {
                 "the output is not there: its feature is off or no frame has made it yet\0"
             }
+            NIMBUS_ERROR_NOISE_CACHE => "the noise cache is damaged or does not match\0",
             NIMBUS_ERROR_PANIC => "a panic inside Nimbus was caught; the context is poisoned\0",
             NIMBUS_ERROR_POISONED => "the context was poisoned by an earlier panic\0",
             NIMBUS_ERROR_DEVICE_LOST => "the GPU device was lost; create a new context\0",
@@ -218,6 +224,7 @@ mod tests {
             (NIMBUS_ERROR_SURFACE, -12),
             (NIMBUS_ERROR_VULKAN_REQUIREMENT, -13),
             (NIMBUS_ERROR_NOT_READY, -14),
+            (NIMBUS_ERROR_NOISE_CACHE, -15),
             (NIMBUS_ERROR_PANIC, -100),
             (NIMBUS_ERROR_POISONED, -101),
             (NIMBUS_ERROR_DEVICE_LOST, -200),

@@ -96,7 +96,7 @@ pub(crate) unsafe fn shadows_from_ext(
     })
 }
 
-fn not_ready() -> FfiError {
+pub(crate) fn not_ready() -> FfiError {
     FfiError::new(
         NIMBUS_ERROR_NOT_READY,
         "no cloud shadow map: chain a NimbusCloudShadowsExt when creating the context, and \

@@ -656,6 +656,66 @@ pub unsafe extern "C" fn nimbus_context_release_vulkan_images(
     }
 }
 
+/// The cloud shadow map's `VkImage` on the host's device, for hosts that bind or copy it with
+/// their own commands. Since ABI 0.6.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct NimbusVulkanShadowImage {
+    /// Must be NULL.
+    pub next: *const NimbusChainedStruct,
+    /// The `VkImage` (2D, one mip, one layer). Nimbus owns it: never destroy or write it. It
+    /// stays valid until the context is destroyed; ask again every frame (it costs nothing).
+    pub image: u64,
+    /// Its `VkFormat`: `VK_FORMAT_R16G16B16A16_SFLOAT`.
+    pub format: u32,
+    /// Texels along a side (the image is square).
+    pub resolution: u32,
+    /// `VkImageUsageFlags` it certainly has: `SAMPLED | STORAGE | TRANSFER_SRC`.
+    pub usage: u32,
+    /// The `VkImageLayout` every `nimbus_context_render_vulkan` leaves it in, with its writes
+    /// made available by that call's final global barrier, and expects it back in when its
+    /// work runs: `VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL`.
+    pub layout: u32,
+}
+
+/// The cloud shadow map's `VkImage` after the last frame of the default view. Sample it (or
+/// copy from it, returning it to `layout`) in commands ordered after that frame's
+/// `nimbus_context_render_vulkan` and before the next one's work (on the same queue, the
+/// submission order is enough); the matrix and layout are `nimbus_context_cloud_shadows`'s.
+/// `NIMBUS_ERROR_INVALID_ARGUMENT` on a context not made on a host Vulkan device;
+/// `NIMBUS_ERROR_NOT_READY` without `NimbusCloudShadowsExt` or before the first frame.
+/// Since ABI 0.6.
+///
+/// Safety: `ctx` NULL or live; `out` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn nimbus_context_cloud_shadow_vulkan_image(
+    ctx: *mut super::NimbusContext,
+    out: *mut NimbusVulkanShadowImage,
+) -> NimbusResult {
+    // SAFETY: `ctx` is NULL or live and `out` NULL or writable, per the caller.
+    unsafe {
+        with_ctx(ctx, |c| {
+            let out = out.as_mut().ok_or_else(|| FfiError::null("out"))?;
+            super::context::check_chain(out.next, &[])?;
+            let (renderer, _) = c.renderer_and_host()?;
+            let map = renderer
+                .cloud_shadows()
+                .ok_or_else(super::shadows::not_ready)?;
+            let image = crate::vulkan::shadow_map_image(&map)
+                .ok_or_else(|| FfiError::arg("the cloud shadow map is not a Vulkan image"))?;
+            *out = NimbusVulkanShadowImage {
+                next: out.next,
+                image: vk::Handle::as_raw(image),
+                format: crate::vulkan::SHADOW_MAP_FORMAT.as_raw() as u32,
+                resolution: map.resolution,
+                usage: crate::vulkan::SHADOW_MAP_USAGE.as_raw(),
+                layout: crate::vulkan::SHADOW_MAP_LAYOUT.as_raw() as u32,
+            };
+            Ok(NIMBUS_OK)
+        })
+    }
+}
+
 #[cfg(all(test, target_pointer_width = "64"))]
 mod tests {
     use super::*;
@@ -673,5 +733,16 @@ mod tests {
         assert_eq!(size_of::<NimbusVulkanSemaphore>(), 24);
         assert_eq!(size_of::<NimbusVulkanTargets>(), 136);
         assert_eq!(offset_of!(NimbusVulkanTargets, signals), 128);
+    }
+
+    /// Released with ABI 0.6.
+    #[test]
+    fn shadow_image_layout_is_pinned() {
+        assert_eq!(size_of::<NimbusVulkanShadowImage>(), 32);
+        assert_eq!(offset_of!(NimbusVulkanShadowImage, image), 8);
+        assert_eq!(offset_of!(NimbusVulkanShadowImage, format), 16);
+        assert_eq!(offset_of!(NimbusVulkanShadowImage, resolution), 20);
+        assert_eq!(offset_of!(NimbusVulkanShadowImage, usage), 24);
+        assert_eq!(offset_of!(NimbusVulkanShadowImage, layout), 28);
     }
 }

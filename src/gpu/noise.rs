@@ -52,9 +52,29 @@ fn volume(device: &wgpu::Device, label: &str, size: u32) -> wgpu::Texture {
         format: wgpu::TextureFormat::Rgba8Unorm,
         usage: wgpu::TextureUsages::TEXTURE_BINDING
             | wgpu::TextureUsages::STORAGE_BINDING
-            | wgpu::TextureUsages::COPY_SRC,
+            | wgpu::TextureUsages::COPY_SRC
+            | wgpu::TextureUsages::COPY_DST,
         view_formats: &[],
     })
+}
+
+/// Uploads tightly packed RGBA8 texels into mip 0 of a cubic volume.
+fn upload_mip0(queue: &wgpu::Queue, texture: &wgpu::Texture, texels: &[u8]) {
+    let edge = texture.width();
+    queue.write_texture(
+        texture.as_image_copy(),
+        texels,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(4 * edge),
+            rows_per_image: Some(edge),
+        },
+        wgpu::Extent3d {
+            width: edge,
+            height: edge,
+            depth_or_array_layers: edge,
+        },
+    );
 }
 
 fn mip_view(texture: &wgpu::Texture, mip: u32) -> wgpu::TextureView {
@@ -85,6 +105,26 @@ fn build_mips(device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, texture
 impl NoiseTextures {
     /// Creates and bakes every noise texture. Submits its own command buffer.
     pub fn new(device: &wgpu::Device, queue: &wgpu::Queue, noise: &NoiseSettings) -> Self {
+        Self::build(device, queue, noise, None)
+    }
+
+    /// Creates the noise textures with the volumes' mip 0 taken from `texels` (base, detail:
+    /// a noise cache's payload, checked against `noise` by the caller) instead of baked.
+    pub fn from_texels(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        noise: &NoiseSettings,
+        texels: (&[u8], &[u8]),
+    ) -> Self {
+        Self::build(device, queue, noise, Some(texels))
+    }
+
+    fn build(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        noise: &NoiseSettings,
+        texels: Option<(&[u8], &[u8])>,
+    ) -> Self {
         let base = volume(device, "nimbus base noise", noise.base_size);
         let detail = volume(device, "nimbus detail noise", noise.detail_size);
         let bn_size = noise.blue_noise_size;
@@ -111,10 +151,19 @@ impl NoiseTextures {
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("nimbus noise bake"),
         });
-        for (texture, entry, size) in [
+        for (i, (texture, entry, size)) in [
             (&base, "bake_base", noise.base_size),
             (&detail, "bake_detail", noise.detail_size),
-        ] {
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            if let Some(t) = texels {
+                // Queue writes land before the command buffer submitted below.
+                upload_mip0(queue, texture, if i == 0 { t.0 } else { t.1 });
+                build_mips(device, &mut encoder, texture);
+                continue;
+            }
             let params = BakeParams {
                 seed: noise.seed,
                 size,

@@ -117,12 +117,26 @@ impl WeatherMaps {
         );
     }
 
-    /// Both maps become `weather`'s (an instant change).
+    /// Both maps become `weather`'s (an instant change). Generated once and copied: the
+    /// bake is the expensive part of a start on software rasterisers.
     fn reset(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, weather: &Weather) {
         let mut encoder = device.create_command_encoder(&Default::default());
         self.generate(device, &mut encoder, self.from, weather);
-        self.generate(device, &mut encoder, self.to, weather);
+        self.copy_slot(&mut encoder, self.from, self.to);
         queue.submit([encoder.finish()]);
+    }
+
+    fn copy_slot(&self, encoder: &mut wgpu::CommandEncoder, from: usize, to: usize) {
+        let size = wgpu::Extent3d {
+            width: self.size,
+            height: self.size,
+            depth_or_array_layers: 1,
+        };
+        encoder.copy_texture_to_texture(
+            self.textures[from].as_image_copy(),
+            self.textures[to].as_image_copy(),
+            size,
+        );
     }
 
     /// Records and submits what the timeline decided for a request toward `target`, and
@@ -177,16 +191,7 @@ impl WeatherMaps {
         };
         // Any slot but `from` takes the copy.
         let to = if from == self.to { self.from } else { self.to };
-        let size = wgpu::Extent3d {
-            width: self.size,
-            height: self.size,
-            depth_or_array_layers: 1,
-        };
-        encoder.copy_texture_to_texture(
-            self.textures[from].as_image_copy(),
-            self.textures[to].as_image_copy(),
-            size,
-        );
+        self.copy_slot(&mut encoder, from, to);
         queue.submit([encoder.finish()]);
         (from, to)
     }

@@ -651,12 +651,15 @@ impl HostFrame {
     /// Validates the images, composites the clouds of `view` into `color` in place (reading
     /// `depth`; in `viewport` only, when given),
     /// leaves both in their final layouts and submits on the host's queue, waiting on and
-    /// signalling the given semaphores. Nothing is submitted when a check fails.
+    /// signalling the given semaphores. Nothing is submitted when a check fails. The cloud
+    /// shadow map, when there is one, is left in [`super::SHADOW_MAP_LAYOUT`].
     ///
     /// # Safety
     ///
     /// the images must be live and created as described, in the layouts described
-    /// when the work runs, and stay alive until it has finished; the semaphores must be live.
+    /// when the work runs, and stay alive until it has finished; the semaphores must be live;
+    /// the cloud shadow map's image, if the host used it, must be back in
+    /// [`super::SHADOW_MAP_LAYOUT`] when the work runs.
     pub unsafe fn render(
         &mut self,
         renderer: &mut Renderer,
@@ -730,6 +733,16 @@ impl HostFrame {
         let mut transitions = vec![transition(c, color, ImageRole::Color)];
         if let (Some(i), Some(image)) = (d, depth) {
             transitions.push(transition(i, image, ImageRole::Depth));
+        }
+        // The cloud shadow map ends every frame sampled-ready (SHADER_READ_ONLY_OPTIMAL,
+        // `super::SHADOW_MAP_LAYOUT`), whichever pass touched it last, so a host can bind its
+        // VkImage (`super::shadow_map_image`) in a known layout.
+        if let Some(map) = renderer.cloud_shadows() {
+            transitions.push(wgpu::TextureTransition {
+                texture: map.texture,
+                selector: None,
+                state: wgpu::TextureUses::RESOURCE,
+            });
         }
         encoder.transition_resources(std::iter::empty(), transitions.into_iter());
         let work = encoder.finish();

@@ -18,6 +18,7 @@ mod features;
 mod image;
 mod queue_lock;
 mod requirements;
+mod shadow_image;
 
 /// The `ash` crate wgpu-hal is built on, for Rust hosts on ash.
 pub use ash;
@@ -27,6 +28,7 @@ pub use features::FeatureBit;
 pub use image::{HostFrame, HostImage, ImageRole, Semaphore, ACCEPTED_LAYOUTS};
 pub use queue_lock::QueueLock;
 pub use requirements::{instance_extensions, DeviceRequirements, HostInstance, MIN_API_VERSION};
+pub use shadow_image::{shadow_map_image, SHADOW_MAP_FORMAT, SHADOW_MAP_LAYOUT, SHADOW_MAP_USAGE};
 
 /// The only queue family wgpu 30 can use: `expose_adapter` inspects family 0 alone.
 ///

@@ -226,6 +226,24 @@ static void test_results_and_versions(void) {
     EXPECT(nimbus_set_log_callback(log_cb, NULL, 4), NIMBUS_OK);
 }
 
+/* Since ABI 0.6: the noise cache. Exported by test_noise_cache (or read from the file given
+ * with --noise-cache, and written there when the file did not exist), chained to the later
+ * creations, which then upload the volumes instead of baking them (valgrind runs the whole
+ * matrix this way: baking under valgrind takes many minutes). */
+static unsigned char *noise_cache = NULL;
+static size_t noise_cache_size = 0;
+static int noise_cache_loaded = 0;
+
+/* Chains the exported cache in `nc` (flags 0) to `desc`, in front of what it holds. */
+static void chain_noise_cache(NimbusContextDesc *desc, NimbusNoiseCacheExt *nc) {
+    memset(nc, 0, sizeof *nc);
+    nc->chain.s_type = NIMBUS_STYPE_NOISE_CACHE;
+    nc->chain.next = desc->next;
+    nc->data = noise_cache;
+    nc->size = noise_cache_size;
+    desc->next = &nc->chain;
+}
+
 static void test_create(void) {
     NimbusContextDesc desc = {0};
     NimbusContext *out = (NimbusContext *)&desc; /* must stay untouched on failure */
@@ -234,6 +252,7 @@ static void test_create(void) {
     NimbusSettingsExt s = {0}, s2 = {0};
     NimbusQualityExt q = {0};
     NimbusCloudShadowsExt cs = {0};
+    NimbusNoiseCacheExt nc;
     NimbusCloudShadowInfo info;
     NimbusWindowHandle win = {0};
 
@@ -325,8 +344,23 @@ static void test_create(void) {
     TRUE(out == before);
     /* The quality level first; the explicit step counts refine it. */
     s.march_max_steps = 64; s.march_min_steps = 32; s.jitter = NIMBUS_JITTER_OFF;
+    if (noise_cache_loaded) {
+        /* A file from an older build may be stale: then it is ignored and exported anew. */
+        chain_noise_cache(&desc, &nc);
+        nc.flags = NIMBUS_NOISE_CACHE_FALLBACK;
+    }
     log_count = 0;
     EXPECT_ON(NULL, nimbus_context_create(&desc, &ctx), NIMBUS_OK);
+    if (ctx && noise_cache_loaded) {
+        uint32_t used = 0;
+        EXPECT_ON(ctx, nimbus_context_noise_from_cache(ctx, &used), NIMBUS_OK);
+        if (!used) {
+            printf("the noise cache file is stale (another bake): ignored, written anew\n");
+            free(noise_cache);
+            noise_cache = NULL;
+            noise_cache_loaded = 0;
+        }
+    }
     TRUE(log_count > 0); /* wgpu's device creation logs at debug level */
     TRUE(log_reentered);
     /* No frame yet: no map to report. */
@@ -406,6 +440,72 @@ static void test_cloud_shadows(void) {
         TRUE(bad == 0);
         free(px);
     }
+}
+
+static void test_noise_cache(void) {
+    NimbusContextDesc desc = {0};
+    NimbusNoiseCacheExt nc;
+    NimbusSettingsExt s = {0};
+    NimbusContext *c = NULL, *before = (NimbusContext *)&desc;
+    size_t size = 0, expected = 48 + 4 * ((size_t)128 * 128 * 128 + 32 * 32 * 32);
+    uint32_t from_cache = 7;
+    unsigned char keep, *exported;
+
+    EXPECT(nimbus_context_export_noise_cache(NULL, NULL, 0, &size), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT_ON(ctx, nimbus_context_export_noise_cache(ctx, NULL, 0, NULL), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT_ON(ctx, nimbus_context_export_noise_cache(ctx, NULL, 0, &size), NIMBUS_OK);
+    TRUE(size == expected);
+    exported = malloc(size);
+    if (!exported) return;
+    size = 0;
+    EXPECT_MSG(ctx, nimbus_context_export_noise_cache(ctx, exported, expected - 1, &size), NIMBUS_ERROR_INVALID_TARGET, "capacity");
+    TRUE(size == expected);
+    EXPECT_ON(ctx, nimbus_context_export_noise_cache(ctx, exported, expected, &size), NIMBUS_OK);
+    TRUE(memcmp(exported, "NIMBUSNC", 8) == 0);
+    EXPECT(nimbus_context_noise_from_cache(NULL, &from_cache), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT_ON(ctx, nimbus_context_noise_from_cache(ctx, NULL), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT_ON(ctx, nimbus_context_noise_from_cache(ctx, &from_cache), NIMBUS_OK);
+    if (noise_cache_loaded) {
+        /* ctx uploaded the file's cache: exporting it gives those bytes back. */
+        TRUE(from_cache == 1);
+        TRUE(size == noise_cache_size && memcmp(exported, noise_cache, size) == 0);
+        free(exported);
+    } else {
+        TRUE(from_cache == 0); /* ctx baked its volumes */
+        noise_cache = exported;
+        noise_cache_size = size;
+    }
+
+    /* Refused before any device work: bad fields, another seed, a damaged byte, an old header. */
+    desc.abi_version = NIMBUS_ABI_VERSION;
+    chain_noise_cache(&desc, &nc);
+    nc.flags = 0x80;
+    EXPECT_MSG(NULL, nimbus_context_create(&desc, &c), NIMBUS_ERROR_INVALID_ARGUMENT, "flags");
+    nc.flags = 0;
+    nc.reserved = 1;
+    EXPECT_MSG(NULL, nimbus_context_create(&desc, &c), NIMBUS_ERROR_INVALID_ARGUMENT, "reserved");
+    nc.reserved = 0;
+    nc.data = NULL;
+    EXPECT_MSG(NULL, nimbus_context_create(&desc, &c), NIMBUS_ERROR_NULL_POINTER, "data");
+    nc.data = noise_cache;
+    nc.size = 0;
+    EXPECT_MSG(NULL, nimbus_context_create(&desc, &c), NIMBUS_ERROR_INVALID_ARGUMENT, "size");
+    nc.size = noise_cache_size - 1;
+    EXPECT_MSG(NULL, nimbus_context_create(&desc, &c), NIMBUS_ERROR_NOISE_CACHE, "truncated");
+    nc.size = noise_cache_size;
+    keep = noise_cache[100000];
+    noise_cache[100000] ^= 1;
+    EXPECT_MSG(NULL, nimbus_context_create(&desc, &c), NIMBUS_ERROR_NOISE_CACHE, "checksum");
+    noise_cache[100000] = keep;
+    s.chain.s_type = NIMBUS_STYPE_SETTINGS;
+    s.noise_seed = 2;
+    nc.chain.next = &s.chain;
+    EXPECT_MSG(NULL, nimbus_context_create(&desc, &c), NIMBUS_ERROR_NOISE_CACHE, "seed 2");
+    nc.chain.next = NULL;
+    desc.abi_version = (NIMBUS_VERSION_MAJOR << 16) | 5u;
+    EXPECT_MSG(NULL, nimbus_context_create(&desc, &c), NIMBUS_ERROR_UNKNOWN_STRUCT, "ABI 0.6");
+    TRUE(c == NULL && before == (NimbusContext *)&desc);
+    /* The cache is only read during the creation: later contexts use it (test_second_context). */
 }
 
 /* Since ABI 0.5: CPU queries, from two threads at once. */
@@ -858,6 +958,7 @@ static void *render_frames(void *arg) {
 static void test_second_context(void) {
     NimbusContextDesc desc = {0};
     NimbusSettingsExt s = {0};
+    NimbusNoiseCacheExt nc;
     NimbusContext *b = NULL;
     NimbusTexture *b_color, *b_out, *b_depth, *orphan;
     NimbusTargets t = {0};
@@ -873,8 +974,15 @@ static void test_second_context(void) {
     s.march_max_steps = 10;
     memcpy((char *)&s + 44, &garbage, sizeof garbage);
     desc.next = &s.chain;
+    if (noise_cache) chain_noise_cache(&desc, &nc);
     EXPECT_ON(NULL, nimbus_context_create(&desc, &b), NIMBUS_OK);
     if (!b) return;
+    {
+        /* Made from ctx's noise cache: the same volumes, not baked again. */
+        uint32_t from_cache = 0;
+        EXPECT_ON(b, nimbus_context_noise_from_cache(b, &from_cache), NIMBUS_OK);
+        TRUE(from_cache == (noise_cache ? 1u : 0u));
+    }
     {
         /* Made without NimbusCloudShadowsExt: no map, even after a frame. */
         NimbusCloudShadowInfo info;
@@ -943,6 +1051,7 @@ static void test_old_header_and_device_loss(void) {
     NimbusSettingsExt s = {0};
     NimbusContext *c = NULL;
     NimbusTexture *color, *out;
+    NimbusNoiseCacheExt nc;
     uint32_t bad_level = 77, low = NIMBUS_QUALITY_LOW;
 
     /* A header of ABI 0.1 declared `quality` at offset 44 of NimbusSettingsExt: read there. */
@@ -968,6 +1077,7 @@ static void test_old_header_and_device_loss(void) {
     c = NULL;
     desc.abi_version = NIMBUS_ABI_VERSION;
     desc.next = NULL;
+    if (noise_cache) chain_noise_cache(&desc, &nc);
     EXPECT_ON(NULL, nimbus_context_create(&desc, &c), NIMBUS_OK);
     if (c) {
         color = make_texture_on(c, W, H, NIMBUS_FORMAT_RGBA16_FLOAT);
@@ -1058,8 +1168,13 @@ static void test_without_device(void) {
 /* One context, one frame, its textures, errors on it, destroy: the device path under valgrind. */
 static void test_one_frame(void) {
     NimbusContextDesc desc = {0};
+    NimbusNoiseCacheExt nc;
     NimbusTexture *color, *out;
     desc.abi_version = NIMBUS_ABI_VERSION;
+    if (noise_cache_loaded) {
+        chain_noise_cache(&desc, &nc);
+        nc.flags = NIMBUS_NOISE_CACHE_FALLBACK;
+    }
     EXPECT_ON(NULL, nimbus_context_create(&desc, &ctx), NIMBUS_OK);
     if (!ctx) return;
     color = make_texture(W, H, NIMBUS_FORMAT_RGBA16_FLOAT);
@@ -1073,15 +1188,52 @@ static void test_one_frame(void) {
     ctx = NULL;
 }
 
+/* Reads the noise cache file `path` into noise_cache; 0 if there is none. */
+static int load_noise_cache(const char *path) {
+    FILE *f = fopen(path, "rb");
+    long n;
+    if (!f) return 0;
+    if (fseek(f, 0, SEEK_END) == 0 && (n = ftell(f)) > 0 && fseek(f, 0, SEEK_SET) == 0 &&
+        (noise_cache = malloc((size_t)n)) != NULL && fread(noise_cache, 1, (size_t)n, f) == (size_t)n) {
+        noise_cache_size = (size_t)n;
+        noise_cache_loaded = 1;
+    } else {
+        free(noise_cache);
+        noise_cache = NULL;
+    }
+    fclose(f);
+    return noise_cache_loaded;
+}
+
+/* Writes the exported cache to `path` for the next runs. */
+static void save_noise_cache(const char *path) {
+    FILE *f = fopen(path, "wb");
+    TRUE(f != NULL);
+    if (!f) return;
+    TRUE(fwrite(noise_cache, 1, noise_cache_size, f) == noise_cache_size);
+    fclose(f);
+    printf("wrote the noise cache %s\n", path);
+}
+
+/* Usage: api_test [--one-frame | --no-device] [--noise-cache FILE] */
 int main(int argc, char **argv) {
-    if (argc > 1 && strcmp(argv[1], "--one-frame") == 0) {
+    const char *mode = "", *cache_path = NULL;
+    int i;
+    for (i = 1; i < argc; i++) {
+        if (strcmp(argv[i], "--noise-cache") == 0 && i + 1 < argc) cache_path = argv[++i];
+        else mode = argv[i];
+    }
+    if (cache_path && load_noise_cache(cache_path)) printf("noise cache from %s\n", cache_path);
+    if (strcmp(mode, "--one-frame") == 0) {
         test_one_frame();
+        free(noise_cache);
         printf("%d passed, %d failed\n", passed, failed);
         return failed == 0 ? 0 : 1;
     }
-    if (argc > 1 && strcmp(argv[1], "--no-device") == 0) {
+    if (strcmp(mode, "--no-device") == 0) {
         test_results_and_versions();
         test_without_device();
+        free(noise_cache);
         printf("bad-input cases: %d\n", bad_cases);
         printf("%d passed, %d failed\n", passed, failed);
         return failed == 0 ? 0 : 1;
@@ -1094,11 +1246,14 @@ int main(int argc, char **argv) {
     test_owned_formats();
     test_views();
     test_cloud_shadows();
+    test_noise_cache();
+    if (cache_path && !noise_cache_loaded && noise_cache) save_noise_cache(cache_path);
     test_cloud_query();
     test_weather_and_resize();
     test_second_context();
     test_old_header_and_device_loss();
     test_poison();
+    free(noise_cache);
     printf("bad-input cases: %d\n", bad_cases);
     printf("%d passed, %d failed\n", passed, failed);
     return failed == 0 ? 0 : 1;

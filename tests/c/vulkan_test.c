@@ -126,6 +126,8 @@ static NimbusSettingsExt settings;
 static NimbusVulkanDeviceExt good_ext;
 static VksImage color, depth;     /* the good pair: R16G16B16A16_SFLOAT and D32_SFLOAT */
 static VksBuffer staging, readback;
+static unsigned char *noise_cache = NULL;
+static NimbusNoiseCacheExt noise_ext;
 static float scene_color[W * H * 4], scene_depth[W * H];
 
 /* The queue lock of the main context: calls counted, nesting and balance checked. */
@@ -884,6 +886,11 @@ static void test_owned_context(void) {
     good_targets(&t);
     EXPECT_MSG(owned, render(owned, &t), NIMBUS_ERROR_INVALID_ARGUMENT, "NimbusVulkanDeviceExt");
     EXPECT_MSG(owned, nimbus_context_release_vulkan_images(owned), NIMBUS_ERROR_INVALID_ARGUMENT, "NimbusVulkanDeviceExt");
+    {
+        NimbusVulkanShadowImage img;
+        memset(&img, 0, sizeof img);
+        EXPECT_MSG(owned, nimbus_context_cloud_shadow_vulkan_image(owned, &img), NIMBUS_ERROR_INVALID_ARGUMENT, "NimbusVulkanDeviceExt");
+    }
     nimbus_context_destroy(owned);
 }
 
@@ -959,12 +966,86 @@ static void test_lifetimes_without_layer(void) {
     if (vks_upload_scene(&d, &up, &c_img, &d_img, VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL,
                          VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL) == 0) {
         vks_device_ext(&d, &e);
+        e.chain.next = good_ext.chain.next; /* the noise cache and the settings */
         lifetimes(&d, &e, &c_img, &d_img, 20, 1, "without the layer");
     }
     vks_image_destroy(&d, &c_img);
     vks_image_destroy(&d, &d_img);
     vks_buffer_destroy(&d, &up);
     vks_destroy(&d);
+}
+
+/* ---- the cloud shadow map as the host's VkImage (since ABI 0.6) --------------------------- */
+
+/* A context with a 32² shadow map: its VkImage is reported in SHADER_READ_ONLY_OPTIMAL after
+ * each frame; the host copies it with its own commands (transitioning it out and back, which
+ * the layer checks against the layout Nimbus really left), gets the texels
+ * nimbus_context_read_cloud_shadows gives, and Nimbus's next frame finds the layout it expects. */
+static void test_cloud_shadow_image(void) {
+    NimbusContextDesc desc = {0};
+    NimbusCloudShadowsExt cs = {0};
+    NimbusVulkanShadowImage img;
+    NimbusChainedStruct unknown = {999, NULL};
+    NimbusContext *c = NULL;
+    float texels[4 * 32 * 32];
+    VkCommandBuffer cmd;
+    VkBufferImageCopy region;
+    size_t i, bad = 0, shaded = 0;
+
+    memset(&img, 0, sizeof img);
+    EXPECT(nimbus_context_cloud_shadow_vulkan_image(NULL, &img), NIMBUS_ERROR_NULL_POINTER);
+    EXPECT_MSG(ctx, nimbus_context_cloud_shadow_vulkan_image(ctx, &img), NIMBUS_ERROR_NOT_READY, "NimbusCloudShadowsExt");
+    cs.chain.s_type = NIMBUS_STYPE_CLOUD_SHADOWS;
+    cs.chain.next = &good_ext.chain;
+    cs.extent = 8000.0f;
+    cs.resolution = 32;
+    cs.update_slices = 1;
+    desc.abi_version = NIMBUS_ABI_VERSION;
+    desc.next = &cs.chain;
+    EXPECT(nimbus_context_create(&desc, &c), NIMBUS_OK);
+    if (!c) return;
+    EXPECT_MSG(c, nimbus_context_cloud_shadow_vulkan_image(c, &img), NIMBUS_ERROR_NOT_READY, "render a frame");
+    EXPECT_MSG(c, good_frame_on(c), NIMBUS_OK, NULL);
+    EXPECT_MSG(c, nimbus_context_cloud_shadow_vulkan_image(c, NULL), NIMBUS_ERROR_NULL_POINTER, "out");
+    img.next = &unknown;
+    EXPECT_MSG(c, nimbus_context_cloud_shadow_vulkan_image(c, &img), NIMBUS_ERROR_UNKNOWN_STRUCT, NULL);
+    img.next = NULL;
+    EXPECT_MSG(c, nimbus_context_cloud_shadow_vulkan_image(c, &img), NIMBUS_OK, NULL);
+    TRUE(img.image != 0 && img.format == VK_FORMAT_R16G16B16A16_SFLOAT && img.resolution == 32);
+    TRUE(img.layout == VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    TRUE((img.usage & (VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT)) ==
+         (VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT));
+
+    /* The host's copy, on its queue after Nimbus's frame (submission order: no semaphore). */
+    cmd = vks_begin_once(&G);
+    TRUE(cmd != VK_NULL_HANDLE);
+    if (!cmd) { nimbus_context_destroy(c); return; }
+    vks_image_barrier(cmd, (VkImage)(uintptr_t)img.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL,
+                      VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL);
+    memset(&region, 0, sizeof region);
+    region.imageSubresource.aspectMask = VK_IMAGE_ASPECT_COLOR_BIT;
+    region.imageSubresource.layerCount = 1;
+    region.imageExtent.width = img.resolution;
+    region.imageExtent.height = img.resolution;
+    region.imageExtent.depth = 1;
+    vkCmdCopyImageToBuffer(cmd, (VkImage)(uintptr_t)img.image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, readback.buffer, 1, &region);
+    vks_image_barrier(cmd, (VkImage)(uintptr_t)img.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
+                      VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
+    TRUE(vks_end_once(&G, cmd) == 0);
+    EXPECT_MSG(c, nimbus_context_read_cloud_shadows(c, texels, 4 * 32 * 32), NIMBUS_OK, NULL);
+    for (i = 0; i < 4 * 32 * 32; i++) {
+        float host = vks_half_to_float(((const uint16_t *)readback.mapped)[i]);
+        if (host != texels[i]) bad++;
+        if (i % 4 == 3 && texels[i] < 0.999f) shaded++;
+    }
+    printf("     shadow map VkImage: %lu of %d values differ from the read-back, %lu of 1024 texels shaded\n",
+           (unsigned long)bad, 4 * 32 * 32, (unsigned long)shaded);
+    TRUE(bad == 0 && shaded > 0);
+    /* Nimbus's next frames start from the layout the host returned the image to. */
+    EXPECT_MSG(c, good_frame_on(c), NIMBUS_OK, NULL);
+    EXPECT_MSG(c, good_frame_on(c), NIMBUS_OK, NULL);
+    vks_wait_idle(&G);
+    nimbus_context_destroy(c);
 }
 
 int main(int argc, char **argv) {
@@ -1040,10 +1121,27 @@ int main(int argc, char **argv) {
     }
     printf("nimbus %s on %s\n", nimbus_version_string(), nimbus_context_adapter_name(ctx));
     EXPECT_MSG(ctx, good_frame_on(ctx), NIMBUS_OK, NULL);
+    /* Every later context on this device starts from ctx's noise cache (since ABI 0.6) instead
+     * of baking the noise again: the lifetime cycles below make dozens. */
+    {
+        size_t size = 0;
+        EXPECT_MSG(ctx, nimbus_context_export_noise_cache(ctx, NULL, 0, &size), NIMBUS_OK, NULL);
+        noise_cache = malloc(size);
+        if (noise_cache) {
+            EXPECT_MSG(ctx, nimbus_context_export_noise_cache(ctx, noise_cache, size, &size), NIMBUS_OK, NULL);
+            memset(&noise_ext, 0, sizeof noise_ext);
+            noise_ext.chain.s_type = NIMBUS_STYPE_NOISE_CACHE;
+            noise_ext.chain.next = good_ext.chain.next;
+            noise_ext.data = noise_cache;
+            noise_ext.size = size;
+            good_ext.chain.next = &noise_ext.chain;
+        }
+    }
 
     test_render_inputs();
     test_layouts_and_semaphores();
     test_mips_and_layers();
+    test_cloud_shadow_image();
     vks_wait_idle(&G);
     printf("     queue lock: %ld lock and %ld unlock calls, %ld out of order\n", lock_calls, unlock_calls, lock_errors);
     TRUE(lock_calls > 0 && lock_calls == unlock_calls && lock_errors == 0 && lock_depth == 0);
@@ -1064,6 +1162,7 @@ int main(int argc, char **argv) {
     vks_buffer_destroy(&G, &staging);
     vks_buffer_destroy(&G, &readback);
     vks_destroy(&G); /* leftovers on the device would be reported here */
+    free(noise_cache);
     {
         int n = vks_validation_messages();
         printf("validation messages: %d\n", n);

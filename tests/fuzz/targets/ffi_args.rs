@@ -53,7 +53,10 @@ libfuzzer_sys::fuzz_target!(|data: &[u8]| {
             [NIMBUS_STYPE_SETTINGS, NIMBUS_STYPE_QUALITY, b.u32()][b.small(3) as usize];
         // NimbusVulkanDeviceExt holds the host's Vulkan handles and pointers, which bytes
         // cannot stand for: the C test covers it.
-        if s.chain.s_type == NIMBUS_STYPE_VULKAN_DEVICE {
+        // A NimbusNoiseCacheExt points at the host's bytes: it gets a link of its own below.
+        if s.chain.s_type == NIMBUS_STYPE_VULKAN_DEVICE
+            || s.chain.s_type == NIMBUS_STYPE_NOISE_CACHE
+        {
             s.chain.s_type = 0;
         }
         s.initial_preset = b.small(8);
@@ -82,6 +85,29 @@ libfuzzer_sys::fuzz_target!(|data: &[u8]| {
             };
         }
     }
+    // Sometimes a noise-cache link in front, over the input's own bytes (its header and
+    // checksum parsed like any cache), with any flags and a size within them.
+    let cache_len = b.small(4096) as usize;
+    let cache_bytes: Vec<u8> = b.0.iter().rev().take(cache_len).copied().collect();
+    let cache = NimbusNoiseCacheExt {
+        chain: NimbusChainedStruct {
+            s_type: NIMBUS_STYPE_NOISE_CACHE,
+            next: if links == 0 {
+                std::ptr::null()
+            } else {
+                base.cast()
+            },
+        },
+        data: if b.small(8) == 0 {
+            std::ptr::null()
+        } else {
+            cache_bytes.as_ptr().cast()
+        },
+        size: b.small(cache_bytes.len() as u32 + 1) as usize,
+        flags: b.small(4),
+        reserved: b.small(2),
+    };
+    let with_cache = b.small(3) == 0;
     let window = NimbusWindowHandle {
         platform: b.small(6),
         // Never dereferenced before a device exists, which the decoder does not reach.
@@ -103,7 +129,9 @@ libfuzzer_sys::fuzz_target!(|data: &[u8]| {
         _ => b.u32(),
     };
     let desc = NimbusContextDesc {
-        next: if links == 0 {
+        next: if with_cache {
+            &cache.chain
+        } else if links == 0 {
             std::ptr::null()
         } else {
             base.cast()
@@ -117,7 +145,8 @@ libfuzzer_sys::fuzz_target!(|data: &[u8]| {
             &window
         },
     };
-    // SAFETY: every pointer in `desc` is NULL, into `settings`, or `window`.
+    // SAFETY: every pointer in `desc` is NULL, into `settings`, `cache` (its data within
+    // `cache_bytes`), or `window`.
     check(unsafe { nimbus::ffi::fuzzing::decode_desc(&desc) });
 
     let mut frame = NimbusFrame {
