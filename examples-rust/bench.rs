@@ -1,7 +1,8 @@
 //! Benchmark: a matrix of presets × camera views × sizes × quality levels, with GPU time per
 //! pass (timestamp queries; wall time beside it), rays traced, GPU memory, and the error of
 //! every image against a converged reference of the same scene and time (FLIP mean and 99th
-//! percentile). Also: cost against pixel count, the cost of a weather bake, a short
+//! percentile). Also: where a default frame's time goes (light, view rays, fixed passes), cost
+//! against pixel count, the cost of a weather bake, a short
 //! moving-camera flight, several cameras on one renderer (a stereo pair, a cube probe), and the
 //! start-up time, cold and from a noise cache. Writes bench.csv, bench.md and chart.png into the output folder.
 //!
@@ -9,6 +10,7 @@
 //!        cargo run --release --example bench -- --from-csv DIR/bench.csv   (re-draw from a run)
 //!        cargo run --release --example bench -- [--quick] --views-only     (the views section)
 //!        cargo run --release --example bench -- --start-only               (the start section)
+//!        cargo run --release --example bench -- [--quick] --profile-only   (the frame's breakdown)
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -19,6 +21,8 @@ use nimbus::glam::Vec3;
 use nimbus::settings::{MultipleScatteringModel, Quality, Temporal, TraceResolution};
 use nimbus::{Headless, Settings, Weather};
 
+#[path = "bench_profile.rs"]
+mod bench_profile;
 #[path = "bench_start.rs"]
 mod bench_start;
 #[path = "bench_views.rs"]
@@ -558,6 +562,12 @@ fn run() -> Result<(), String> {
     while let Some(a) = args.next() {
         match a.as_str() {
             "--quick" => quick = true,
+            "--profile-only" => {
+                // Only the breakdown of a default frame (printed), at the run's size.
+                let size = if quick { (320, 180) } else { (1280, 720) };
+                bench_profile::profile_section(size)?;
+                return Ok(());
+            }
             "--start-only" => {
                 // Only the start-up section (printed).
                 bench_start::start_section()?;
@@ -587,7 +597,7 @@ fn run() -> Result<(), String> {
             }
             _ => {
                 return Err(format!(
-                "unexpected argument {a:?}; usage: bench [--quick] [--out DIR] [--views-only | --start-only] | --from-csv FILE"
+                "unexpected argument {a:?}; usage: bench [--quick] [--out DIR] [--views-only | --start-only | --profile-only] | --from-csv FILE"
             ))
             }
         }
@@ -708,6 +718,7 @@ fn run() -> Result<(), String> {
         if quick { "quick" } else { "full" },
         started.elapsed().as_secs_f64()
     );
+    md.push_str(&bench_profile::profile_section(size)?);
     md.push_str(&tables(&level_rows, &ablation_rows));
     md.push_str("\n## Cost against pixel count (medium, sparse, ground view, settled)\n\n| size | pixels | wall ms | wall ms per Mpixel | GPU ms (timestamps) |\n|---|---|---|---|---|\n");
     for (s, gpu, wall) in &scaling {

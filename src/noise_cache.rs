@@ -4,8 +4,11 @@
 //! their sizes and the bake shaders. Baking them is the bulk of a renderer's creation on a
 //! software rasteriser (seconds on lavapipe; milliseconds on a real GPU). A host exports them
 //! once ([`crate::Renderer::export_noise_cache`]), stores the bytes (an asset, a file in its
-//! cache folder) and hands them to later creations ([`crate::Renderer::with_noise_cache`],
-//! C: `NimbusNoiseCacheExt`), which upload them instead of baking: the same texels, bit for bit.
+//! cache folder) and hands them to later creations ([`crate::Renderer::with_noise`] with
+//! [`crate::NoiseStart::Cache`], C: `NimbusNoiseCacheExt`), which upload them instead of
+//! baking: on the device that exported them, the same texels bit for bit. The bake is float
+//! arithmetic, so another GPU or driver may bake texels that differ in their last bit from a
+//! cache made elsewhere; the cache is accepted there too (its volumes are equally valid noise).
 //!
 //! Layout (little endian), version 1:
 //!
@@ -26,7 +29,7 @@
 //! a bake, so they match too.
 
 use crate::error::{Error, Result};
-use crate::gpu::shaders::{COMMON, NOISE, NOISE_BAKE};
+use crate::gpu::shaders::NOISE_BAKE_MODULES;
 use crate::settings::NoiseSettings;
 
 const MAGIC: &[u8; 8] = b"NIMBUSNC";
@@ -35,12 +38,14 @@ const FORMAT_VERSION: u32 = 1;
 pub const HEADER_BYTES: usize = 48;
 
 /// FNV-1a (32 bit) over the bake shaders' source text: any change to the noise algorithm
-/// (or even its comments, which is merely conservative) makes older caches unusable.
-const fn source_hash(parts: &[&str]) -> u32 {
+/// (or even its comments, which is merely conservative) makes older caches unusable. The
+/// modules are the bake pass's own list (`NOISE_BAKE_MODULES`, which `PASSES` uses), so a
+/// module added to the pass is hashed too.
+const fn source_hash(modules: &[(&str, &str)]) -> u32 {
     let mut h: u32 = 0x811c_9dc5;
     let mut p = 0;
-    while p < parts.len() {
-        let bytes = parts[p].as_bytes();
+    while p < modules.len() {
+        let bytes = modules[p].1.as_bytes();
         let mut i = 0;
         while i < bytes.len() {
             h ^= bytes[i] as u32;
@@ -53,7 +58,7 @@ const fn source_hash(parts: &[&str]) -> u32 {
 }
 
 /// The identity of the bake this library runs.
-pub(crate) const BAKE_ID: u32 = source_hash(&[COMMON.1, NOISE.1, NOISE_BAKE.1]);
+pub(crate) const BAKE_ID: u32 = source_hash(NOISE_BAKE_MODULES);
 
 /// A 64-bit hash of the header's first 40 bytes and the payload, a word at a time (fast even
 /// unoptimised): each little-endian word is mixed in with a multiply and rotate (the FNV idea
@@ -79,9 +84,13 @@ fn volume_bytes(edge: u32) -> usize {
     4 * (edge as usize).pow(3)
 }
 
-/// The size in bytes of a cache of a `base`³ and a `detail`³ volume.
-pub fn cache_bytes(base: u32, detail: u32) -> usize {
-    HEADER_BYTES + volume_bytes(base) + volume_bytes(detail)
+/// The size in bytes of a cache of a `base`³ and a `detail`³ volume; `None` if it does not fit
+/// in `usize` (valid settings always fit: edges up to 256 and 128).
+pub fn cache_bytes(base: u32, detail: u32) -> Option<usize> {
+    let volume = |edge: u32| (edge as usize).checked_pow(3)?.checked_mul(4);
+    HEADER_BYTES
+        .checked_add(volume(base)?)?
+        .checked_add(volume(detail)?)
 }
 
 /// The header fields of a cache, as [`NoiseCacheInfo::parse`] read them.
@@ -259,6 +268,15 @@ mod tests {
     }
 
     #[test]
+    fn cache_size_is_checked_arithmetic() {
+        assert_eq!(
+            cache_bytes(128, 32),
+            Some(48 + 4 * (128 * 128 * 128 + 32 * 32 * 32))
+        );
+        assert_eq!(cache_bytes(u32::MAX, 8), None);
+    }
+
+    #[test]
     fn truncation_padding_and_garbage_are_refused_with_a_reason() {
         let bytes = sample();
         for cut in [0, 7, 47, 48, bytes.len() - 1] {
@@ -294,8 +312,18 @@ mod tests {
 
     #[test]
     fn bake_id_follows_the_shader_source() {
-        assert_ne!(source_hash(&["a"]), source_hash(&["b"]));
-        assert_eq!(BAKE_ID, source_hash(&[COMMON.1, NOISE.1, NOISE_BAKE.1]));
+        assert_ne!(source_hash(&[("x", "a")]), source_hash(&[("x", "b")]));
+        // The id hashes exactly the modules the bake pipeline is built from.
+        let pass = crate::gpu::shaders::PASSES
+            .iter()
+            .find(|(name, _)| *name == "noise_bake")
+            .map(|(_, modules)| *modules)
+            .unwrap();
+        assert_eq!(BAKE_ID, source_hash(pass));
+        let mut changed: Vec<(&str, &str)> = pass.to_vec();
+        let edited = format!("{} ", changed[1].1);
+        changed[1].1 = &edited;
+        assert_ne!(BAKE_ID, source_hash(&changed));
         let mut bytes = sample();
         bytes[12..16].copy_from_slice(&(BAKE_ID ^ 1).to_le_bytes());
         let e = NoiseCacheInfo::parse(&bytes).unwrap_err().to_string();

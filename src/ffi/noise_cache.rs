@@ -126,7 +126,8 @@ pub unsafe extern "C" fn nimbus_context_export_noise_cache(
         with_ctx(ctx, |inner| {
             let size = size.as_mut().ok_or_else(|| FfiError::null("size"))?;
             let noise = &inner.renderer_mut().settings().noise;
-            let want = crate::noise_cache::cache_bytes(noise.base_size, noise.detail_size);
+            let want = crate::noise_cache::cache_bytes(noise.base_size, noise.detail_size)
+                .ok_or_else(|| FfiError::arg("the noise volumes are too large for a cache"))?;
             *size = want;
             if data.is_null() {
                 return Ok(NIMBUS_OK);
@@ -139,6 +140,12 @@ pub unsafe extern "C" fn nimbus_context_export_noise_cache(
             }
             let bytes = inner.renderer_mut().export_noise_cache()?;
             inner.take_device_errors()?;
+            if bytes.len() != want {
+                return Err(FfiError::new(
+                    NIMBUS_ERROR_INVALID_TARGET,
+                    format!("the noise cache came out {} bytes, not {want}", bytes.len()),
+                ));
+            }
             // SAFETY: the caller guarantees room for capacity (>= want = bytes.len()) bytes.
             std::slice::from_raw_parts_mut(data.cast::<u8>(), bytes.len()).copy_from_slice(&bytes);
             Ok(NIMBUS_OK)
@@ -166,7 +173,7 @@ pub unsafe extern "C" fn nimbus_context_noise_from_cache(
     }
 }
 
-#[cfg(test)]
+#[cfg(all(test, target_pointer_width = "64"))]
 mod tests {
     use super::*;
 

@@ -158,6 +158,18 @@ pub unsafe extern "C" fn nimbus_context_read_cloud_shadows(
             let map = inner.renderer_mut().cloud_shadows().ok_or_else(not_ready)?;
             let want = check_float_count(float_count, (map.resolution, map.resolution), "map")?;
             let bytes = read_texture(&device, &queue, map.texture, 0)?;
+            // The copy left the map in a transfer layout: put it back where the host's Vulkan
+            // device expects it (NimbusVulkanShadowImage.layout), whoever samples it next.
+            let mut encoder = device.create_command_encoder(&Default::default());
+            encoder.transition_resources(
+                std::iter::empty(),
+                std::iter::once(wgpu::TextureTransition {
+                    texture: map.texture,
+                    selector: None,
+                    state: wgpu::TextureUses::RESOURCE,
+                }),
+            );
+            queue.submit([encoder.finish()]);
             inner.take_device_errors()?;
             let floats = read_halfs(&bytes);
             // SAFETY: the caller guarantees room for float_count (= want) floats.

@@ -36,9 +36,12 @@ pub(crate) const TEMPORAL: (&str, &str) = shader!("temporal.wgsl");
 pub(crate) const COMPOSITE: (&str, &str) = shader!("composite.wgsl");
 pub(crate) const COMPOSITE_SEPARATE: (&str, &str) = shader!("composite_separate.wgsl");
 
+/// The noise bake's modules: also what a noise cache's bake id hashes (`crate::noise_cache`).
+pub(crate) const NOISE_BAKE_MODULES: &[(&str, &str)] = &[COMMON, NOISE, NOISE_BAKE];
+
 /// The passes and the modules each is built from, in order.
 pub(crate) const PASSES: &[(&str, &[(&str, &str)])] = &[
-    ("noise_bake", &[COMMON, NOISE, NOISE_BAKE]),
+    ("noise_bake", NOISE_BAKE_MODULES),
     ("weather_bake", &[COMMON, NOISE, WEATHER_BAKE]),
     ("weather_blend", &[WEATHER_BLEND]),
     ("mip_downsample", &[MIP_DOWNSAMPLE]),

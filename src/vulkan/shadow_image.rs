@@ -26,7 +26,9 @@ pub const SHADOW_MAP_USAGE: vk::ImageUsageFlags = vk::ImageUsageFlags::from_raw(
 /// Vulkan device. The handle stays valid while the map does: until a settings change makes a
 /// map of another size, or the renderer is dropped; ask again every frame (it costs nothing).
 /// Nimbus owns the image: never destroy it, write it, or leave it in another layout than
-/// [`SHADOW_MAP_LAYOUT`] when Nimbus's next frame runs.
+/// [`SHADOW_MAP_LAYOUT`] when Nimbus's next frame runs. A read-back through wgpu
+/// ([`crate::device::read_texture`]) leaves it in a transfer layout until the next
+/// [`super::HostFrame::render`] (the C read-back restores the layout itself).
 pub fn shadow_map_image(map: &CloudShadowMap<'_>) -> Option<vk::Image> {
     // SAFETY: the raw handle is only read, never destroyed or used here; the hal texture
     // guard is dropped at once (it borrows nothing the caller keeps).

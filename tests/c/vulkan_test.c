@@ -980,7 +980,8 @@ static void test_lifetimes_without_layer(void) {
 /* A context with a 32² shadow map: its VkImage is reported in SHADER_READ_ONLY_OPTIMAL after
  * each frame; the host copies it with its own commands (transitioning it out and back, which
  * the layer checks against the layout Nimbus really left), gets the texels
- * nimbus_context_read_cloud_shadows gives, and Nimbus's next frame finds the layout it expects. */
+ * nimbus_context_read_cloud_shadows gives (read first: the read-back must restore the layout),
+ * and Nimbus's next frame finds the layout it expects. */
 static void test_cloud_shadow_image(void) {
     NimbusContextDesc desc = {0};
     NimbusCloudShadowsExt cs = {0};
@@ -1016,7 +1017,9 @@ static void test_cloud_shadow_image(void) {
     TRUE((img.usage & (VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT)) ==
          (VK_IMAGE_USAGE_SAMPLED_BIT | VK_IMAGE_USAGE_TRANSFER_SRC_BIT));
 
-    /* The host's copy, on its queue after Nimbus's frame (submission order: no semaphore). */
+    /* Nimbus's own read-back first: it must leave the image in the layout it reports. */
+    EXPECT_MSG(c, nimbus_context_read_cloud_shadows(c, texels, 4 * 32 * 32), NIMBUS_OK, NULL);
+    /* The host's copy, on its queue after Nimbus's work (submission order: no semaphore). */
     cmd = vks_begin_once(&G);
     TRUE(cmd != VK_NULL_HANDLE);
     if (!cmd) { nimbus_context_destroy(c); return; }
@@ -1032,7 +1035,6 @@ static void test_cloud_shadow_image(void) {
     vks_image_barrier(cmd, (VkImage)(uintptr_t)img.image, VK_IMAGE_ASPECT_COLOR_BIT, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL,
                       VK_IMAGE_LAYOUT_SHADER_READ_ONLY_OPTIMAL);
     TRUE(vks_end_once(&G, cmd) == 0);
-    EXPECT_MSG(c, nimbus_context_read_cloud_shadows(c, texels, 4 * 32 * 32), NIMBUS_OK, NULL);
     for (i = 0; i < 4 * 32 * 32; i++) {
         float host = vks_half_to_float(((const uint16_t *)readback.mapped)[i]);
         if (host != texels[i]) bad++;
