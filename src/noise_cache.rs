@@ -202,6 +202,17 @@ pub(crate) fn payload<'a>(bytes: &'a [u8], info: &NoiseCacheInfo) -> (&'a [u8], 
     payload.split_at(volume_bytes(info.base_size))
 }
 
+/// A cache's base and detail texels, once its header and checksum are checked and it holds
+/// the volumes `noise` asks for: the one check both the Rust and the C creation use.
+pub(crate) fn volumes_for<'a>(
+    bytes: &'a [u8],
+    noise: &NoiseSettings,
+) -> Result<(&'a [u8], &'a [u8])> {
+    let info = NoiseCacheInfo::parse(bytes)?;
+    info.check_matches(noise)?;
+    Ok(payload(bytes, &info))
+}
+
 /// Serialises read-back mip-0 texels of both volumes.
 pub(crate) fn encode(noise: &NoiseSettings, base: &[u8], detail: &[u8]) -> Vec<u8> {
     let mut out = Vec::with_capacity(HEADER_BYTES + base.len() + detail.len());

@@ -17,6 +17,7 @@ use crate::gpu::shadow::{NoShadow, ShadowFrame, ShadowPass};
 use crate::gpu::temporal::{ResolveFrame, TemporalPipeline, TemporalUniforms};
 use crate::gpu::timing::{GpuTimer, PassTimes};
 use crate::gpu::weather::WeatherMaps;
+use crate::noise_cache::volumes_for;
 use crate::settings::Settings;
 use crate::view::{Pending, ViewId, ViewState, Views};
 use crate::weather::{Timeline, Weather, WeatherSample};
@@ -378,8 +379,8 @@ impl Renderer {
         settings.validate()?;
         let cache = match noise {
             NoiseStart::Bake => None,
-            NoiseStart::Cache(bytes) => Some(usable_cache(bytes, &settings)?),
-            NoiseStart::CacheOrBake(bytes) => match usable_cache(bytes, &settings) {
+            NoiseStart::Cache(bytes) => Some(volumes_for(bytes, &settings.noise)?),
+            NoiseStart::CacheOrBake(bytes) => match volumes_for(bytes, &settings.noise) {
                 Ok(c) => Some(c),
                 Err(e) => {
                     log::warn!("{e}; baking the noise volumes instead");
@@ -1149,11 +1150,4 @@ impl ComputePasses {
             c.clear();
         }
     }
-}
-
-/// A cache's volumes, once its header, checksum and match with `settings` are checked.
-fn usable_cache<'a>(bytes: &'a [u8], settings: &Settings) -> Result<(&'a [u8], &'a [u8])> {
-    let info = crate::noise_cache::NoiseCacheInfo::parse(bytes)?;
-    info.check_matches(&settings.noise)?;
-    Ok(crate::noise_cache::payload(bytes, &info))
 }

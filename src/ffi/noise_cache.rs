@@ -68,7 +68,7 @@ impl NoiseCacheArg {
     pub(crate) unsafe fn check(&self, settings: &crate::Settings) -> FfiResult<()> {
         // SAFETY: per the caller.
         if let NoiseStart::Cache(bytes) = unsafe { self.start() } {
-            crate::noise_cache::NoiseCacheInfo::parse(bytes)?.check_matches(&settings.noise)?;
+            crate::noise_cache::volumes_for(bytes, &settings.noise)?;
         }
         Ok(())
     }
