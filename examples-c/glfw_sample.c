@@ -2,7 +2,8 @@
  * depth occludes them. Uses only include/nimbus.h and the shared library.
  *
  * Usage: glfw_sample [--size WIDTHxHEIGHT] [--frames N --screenshot FILE.png]
- *                    [--no-cloud-shadows] [--noise-cache FILE | --no-noise-cache]
+ *                    [--no-cloud-shadows] [--no-ambient-light] [--preset 1-5]
+ *                    [--noise-cache FILE | --no-noise-cache]
  * With --frames it runs N frames on a fixed 1/30 s clock and writes the last one as a PNG
  * (for headless runs under Xvfb). The baked noise volumes are kept in a noise cache file
  * ($XDG_CACHE_HOME/nimbus-noise.cache, else ~/.cache/nimbus-noise.cache): the first start bakes
@@ -50,6 +51,10 @@ typedef struct {
     /* The cloud shadow map, read back after each frame for the CPU scene's sunlight. */
     float *shadow_texels;
     SceneShadows shadows;
+    /* The light at the camera (nimbus_context_read_ambient_light): the scene's sky ambient
+     * dims under the clouds and takes their light. Off with --no-ambient-light. */
+    NimbusAmbientLight ambient;
+    int use_ambient;
 } App;
 
 static int fail(App *app, const char *what, int32_t rc) {
@@ -171,6 +176,11 @@ static int32_t draw(App *app, double time, NimbusTexture *output) {
             nimbus_context_read_cloud_shadows(app->ctx, app->shadow_texels, floats) == NIMBUS_OK)
             app->shadows.texels = app->shadow_texels;
     }
+    app->shadows.ambient = NULL;
+    app->ambient.next = NULL;
+    if (app->use_ambient &&
+        nimbus_context_read_ambient_light(app->ctx, NIMBUS_VIEW_DEFAULT, &app->ambient) == NIMBUS_OK)
+        app->shadows.ambient = &app->ambient;
     scene_render(app->color_buf, app->depth_buf, app->width, app->height, app->eye, fwd, fov, view_proj,
                  sun, sun_color, illuminance, &app->shadows);
     rc = nimbus_texture_write(app->scene, app->color_buf, pixels * 4 * sizeof(float));
@@ -256,7 +266,7 @@ int main(int argc, char **argv) {
     uint32_t from_cache = 0;
     char cache_path[1024] = "";
     const char *shot = NULL;
-    int frames = 0, frame, i, w = 960, h = 540, no_shadows = 0;
+    int frames = 0, frame, i, w = 960, h = 540, no_shadows = 0, no_ambient = 0, start_preset = 0;
     double last, title_time, frame_ms = 0.0, started;
     char title[160];
 
@@ -269,10 +279,13 @@ int main(int argc, char **argv) {
         if (!strcmp(argv[i], "--frames") && i + 1 < argc) frames = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--screenshot") && i + 1 < argc) shot = argv[++i];
         else if (!strcmp(argv[i], "--no-cloud-shadows")) no_shadows = 1;
+        else if (!strcmp(argv[i], "--no-ambient-light")) no_ambient = 1;
+        else if (!strcmp(argv[i], "--preset") && i + 1 < argc && atoi(argv[i + 1]) >= 1 && atoi(argv[i + 1]) <= 5)
+            start_preset = atoi(argv[++i]);
         else if (!strcmp(argv[i], "--noise-cache") && i + 1 < argc) snprintf(cache_path, sizeof cache_path, "%s", argv[++i]);
         else if (!strcmp(argv[i], "--no-noise-cache")) cache_path[0] = '\0';
         else if (!strcmp(argv[i], "--size") && i + 1 < argc && sscanf(argv[i + 1], "%dx%d", &w, &h) == 2) i++;
-        else { fprintf(stderr, "usage: %s [--size WxH] [--frames N --screenshot FILE.png] [--no-cloud-shadows] [--noise-cache FILE | --no-noise-cache]\n", argv[0]); return 2; }
+        else { fprintf(stderr, "usage: %s [--size WxH] [--frames N --screenshot FILE.png] [--no-cloud-shadows] [--no-ambient-light] [--preset 1-5] [--noise-cache FILE | --no-noise-cache]\n", argv[0]); return 2; }
     }
     if (shot && frames <= 0) frames = 1;
 
@@ -282,6 +295,7 @@ int main(int argc, char **argv) {
     app.sun_elevation = 35.0f;
     app.sun_azimuth = 150.0f;
     app.preset = NIMBUS_PRESET_SPARSE;
+    app.use_ambient = !no_ambient;
     printf("%s", HELP);
     nimbus_set_log_callback(log_to_stderr, NULL, 2);
 
@@ -328,6 +342,12 @@ int main(int argc, char **argv) {
     printf("nimbus %s on %s (noise %s)\n", nimbus_version_string(), nimbus_context_adapter_name(app.ctx),
            from_cache ? "from the cache" : "baked");
     if (make_targets(&app)) return fail(&app, "creating the scene textures", -1);
+    /* --preset: start in another weather at once (1 clear ... 5 stormy, as the keys). */
+    if (start_preset) {
+        app.preset = (uint32_t)start_preset - 1u + NIMBUS_PRESET_CLEAR;
+        i = nimbus_context_set_weather(app.ctx, app.preset, 0, 0.0, 0.0);
+        if (i != NIMBUS_OK) return fail(&app, "nimbus_context_set_weather", i);
+    }
 
     glfwSetWindowUserPointer(window, &app);
     glfwSetKeyCallback(window, on_key);
@@ -359,6 +379,10 @@ int main(int argc, char **argv) {
     }
     if (shot && screenshot(&app, (frames - 1) / 30.0, shot)) return 1;
     printf("%d frames, last frame %.1f ms\n", frame, frame_ms);
+    if (app.shadows.ambient)
+        printf("ambient light from above: clouds' irradiance (%.3f, %.3f, %.3f), sky visibility %.3f\n",
+               app.ambient.above_cloud_irradiance[0], app.ambient.above_cloud_irradiance[1],
+               app.ambient.above_cloud_irradiance[2], app.ambient.above_sky_visibility);
 
     nimbus_texture_destroy(app.scene);
     nimbus_texture_destroy(app.depth);

@@ -10,11 +10,13 @@
 #include "camera.h"
 #include "nimbus.h"
 
-/* A read-back copy of Nimbus's cloud shadow map (nimbus_context_read_cloud_shadows) and its
- * layout (nimbus_context_cloud_shadows). */
+/* What the clouds give the scene's lighting: a read-back copy of Nimbus's cloud shadow map
+ * (nimbus_context_read_cloud_shadows) and its layout (nimbus_context_cloud_shadows), and the
+ * light at the camera (nimbus_context_read_ambient_light). */
 typedef struct {
     const float *texels; /* 4 floats per texel: front depth, mean extinction, optical depth, T */
     NimbusCloudShadowInfo info;
+    const NimbusAmbientLight *ambient; /* NULL: the scene's own clear-sky ambient alone */
 } SceneShadows;
 
 /* The fraction of sunlight reaching world point p through the clouds: the map's texels
@@ -108,9 +110,21 @@ static inline void scene_render(float *color, float *depth, int w, int h, vec3 e
     vec3 up = v3_cross(right, fwd);
     float tan_half = tanf(0.5f * fov_y), aspect = (float)w / (float)h;
     float day = sun.y * 4.0f, light = sun_illuminance / 10.0f;
+    vec3 ambient;
     int x, y;
     size_t i;
     day = day < 0.15f ? 0.15f : day > 1.0f ? 1.0f : day;
+    /* Sky ambient 0.25 * day under a clear sky. Under clouds only the sky visibility V of it
+     * gets through, and the clouds add their own light E (Nimbus's units: the sun gives an
+     * irradiance of `illuminance`, which this scene draws as 0.06 * illuminance):
+     * ambient = V * sky + 0.06 * E (docs/frame-outputs.md, "Ambient light at the camera"). */
+    ambient = v3(0.25f * day, 0.25f * day, 0.25f * day);
+    if (shadows && shadows->ambient) {
+        const NimbusAmbientLight *a = shadows->ambient;
+        ambient = v3_add(v3_scale(ambient, a->above_sky_visibility),
+                         v3_scale(v3(a->above_cloud_irradiance[0], a->above_cloud_irradiance[1],
+                                     a->above_cloud_irradiance[2]), 0.06f));
+    }
     for (y = 0; y < h; y++) {
         for (x = 0; x < w; x++) {
             float nx = ((float)x + 0.5f) / (float)w * 2.0f - 1.0f;
@@ -140,7 +154,7 @@ static inline void scene_render(float *color, float *depth, int w, int h, vec3 e
                 vec3 hit = v3_add(eye, v3_scale(d, best)), ndc;
                 float lambert = v3_dot(n, sun), fog = 1.0f - expf(-best / 40000.0f);
                 lambert = lambert > 0.0f ? lambert * scene_sun_visibility(shadows, hit) : 0.0f;
-                c = v3_scale(albedo, (0.25f * day + 0.6f * lambert * light));
+                c = v3_mul(albedo, v3_add(ambient, v3_scale(v3(1.0f, 1.0f, 1.0f), 0.6f * lambert * light)));
                 c = v3_add(v3_scale(c, 1.0f - fog), v3_scale(scene_sky(v3(d.x, 0.05f, d.z), sun, sun_color, day), fog));
                 mat_project(view_proj, hit, &ndc);
                 depth[i] = ndc.z < 0.0f ? 0.0f : ndc.z > 1.0f ? 1.0f : ndc.z;

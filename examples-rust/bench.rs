@@ -190,8 +190,9 @@ fn measure(
         if i + tail >= frames {
             wall.push(elapsed);
             if let Some(p) = h.renderer().last_pass_times().map_err(|e| e.to_string())? {
-                // The cloud shadow map's update (when on) counts with the march it serves.
-                march.push(p.march_ms + p.shadow_ms);
+                // The cloud shadow map's update (when on) counts with the march it serves, and
+                // the ambient probe (the same ray march, at the camera) with it.
+                march.push(p.march_ms + p.shadow_ms + p.ambient_ms);
                 resolve.push(p.resolve_ms);
                 comp.push(p.composite_ms);
             }

@@ -74,7 +74,7 @@
 /*
  Minor version.
  */
-#define NIMBUS_VERSION_MINOR 6
+#define NIMBUS_VERSION_MINOR 7
 
 /*
  Patch version.
@@ -672,6 +672,37 @@ typedef struct NimbusFrameOutputs {
    */
   uint32_t has_cloud_shadows;
 } NimbusFrameOutputs;
+
+/*
+ The light at a view's camera from the hemisphere above and the one below, as its last
+ submitted frame found it (docs/frame-outputs.md, "Ambient light"). For each hemisphere:
+ the clouds' irradiance (rgb, linear, the sun's units) and the sky visibility in [0, 1], the
+ share of the host's own light from that hemisphere (its sky above, its ground below) that
+ still arrives through the clouds; the total is `cloud_irradiance + sky_visibility × host`.
+ Since ABI 0.7.
+ */
+typedef struct NimbusAmbientLight {
+  /*
+   Must be NULL.
+   */
+  const struct NimbusChainedStruct *next;
+  /*
+   The clouds' irradiance on a surface facing up (rgb).
+   */
+  float above_cloud_irradiance[3];
+  /*
+   The cosine-weighted transmittance of the clouds over the upper hemisphere.
+   */
+  float above_sky_visibility;
+  /*
+   The clouds' irradiance on a surface facing down (clouds below a camera above them).
+   */
+  float below_cloud_irradiance[3];
+  /*
+   The cosine-weighted transmittance of the clouds over the lower hemisphere.
+   */
+  float below_sky_visibility;
+} NimbusAmbientLight;
 
 /*
  Where the cloud shadow map stands after the last frame of the default view. Since ABI 0.5.
@@ -1375,6 +1406,19 @@ NimbusResult nimbus_context_read_frame_outputs(struct NimbusContext *ctx,
                                                uint32_t view,
                                                float *out,
                                                size_t float_count);
+
+/*
+ Writes the light at `view`'s camera (above and below) to `*out`. Waits for the GPU (a
+ 32-byte copy after what was submitted): a host that lights with it every frame may read it
+ every few frames. `NIMBUS_ERROR_NOT_READY` before the view's first frame;
+ `NIMBUS_ERROR_INVALID_ARGUMENT` for an unknown view; `NIMBUS_ERROR_UNKNOWN_STRUCT` when
+ `out->next` is not NULL. Since ABI 0.7.
+
+ Safety: `ctx` NULL or live; `out` NULL or writable.
+ */
+NimbusResult nimbus_context_read_ambient_light(struct NimbusContext *ctx,
+                                               uint32_t view,
+                                               struct NimbusAmbientLight *out);
 
 /*
  Makes a CPU query that answers as the context renders: the cloud density at a point, the

@@ -21,6 +21,7 @@
 //! Without a device, [`Headless`] creates one (software Vulkan is fine), owns its targets and
 //! reads the result back.
 
+pub mod ambient;
 pub mod atmosphere;
 pub mod demo;
 pub mod device;
@@ -43,6 +44,7 @@ pub mod view;
 pub mod vulkan;
 pub mod weather;
 
+pub use ambient::{AmbientLight, HemisphereLight};
 pub use error::{Error, Result};
 pub use frame::{Camera, DepthConvention, FrameInputs, Sun};
 pub use gpu::noise::NoiseVolume;

@@ -9,6 +9,7 @@ use wgpu::TextureFormat as F;
 use crate::device::gpu_scope;
 use crate::error::{invalid_target, Error, Result};
 use crate::frame::FrameInputs;
+use crate::gpu::ambient::AmbientPipeline;
 use crate::gpu::composite::{CompositeCache, CompositeInputs, CompositeUniforms};
 use crate::gpu::march::{MarchPipeline, MarchUniforms};
 use crate::gpu::noise::{NoiseTextures, NoiseVolume};
@@ -187,6 +188,11 @@ pub struct FrameOutputs<'a> {
     pub depth: &'a wgpu::TextureView,
     /// The cloud shadow map, when on ([`Renderer::cloud_shadows`]).
     pub shadows: Option<CloudShadowMap<'a>>,
+    /// The light at the camera from above and below, on the GPU (`STORAGE | COPY_SRC`, 32
+    /// bytes): two `vec4<f32>`, above then below, each rgb the clouds' irradiance and a the sky
+    /// visibility ([`crate::HemisphereLight`]). Bind it as a read-only storage buffer in passes
+    /// recorded after the view's encode; [`Renderer::read_ambient_light`] reads it on the CPU.
+    pub ambient: &'a wgpu::Buffer,
 }
 
 /// Which subresource of each target the views show, for callers that make their own views
@@ -730,6 +736,20 @@ impl Renderer {
                     );
                 }
             }
+            let shadow = match &self.shadow {
+                Some(p) => (&p.view, &p.sampling),
+                None => (&self.no_shadow.view, &self.no_shadow.sampling),
+            };
+            self.passes.ambient.record(
+                &device,
+                encoder,
+                &state.uniforms,
+                &self.noise,
+                self.weather_maps.views(),
+                shadow,
+                &state.ambient,
+                self.timer.as_ref(),
+            );
             let (march, resolve) = self.passes.for_depth(checked.depth_kind);
             let scene_depth = targets.depth.unwrap_or(&self.no_depth);
             let fresh = &sized.fresh;
@@ -743,10 +763,7 @@ impl Renderer {
                 &fresh.clouds.view,
                 &fresh.depth.view,
                 &sized.fresh_stats.view,
-                match &self.shadow {
-                    Some(p) => (&p.view, &p.sampling),
-                    None => (&self.no_shadow.view, &self.no_shadow.sampling),
-                },
+                shadow,
                 (fresh.clouds.texture.width(), fresh.clouds.texture.height()),
                 self.timer.as_ref(),
             );
@@ -939,7 +956,28 @@ impl Renderer {
             clouds: &clouds.view,
             depth: &depth.view,
             shadows: self.cloud_shadows(),
+            ambient: &self.views.get(view)?.ambient,
         })
+    }
+
+    /// The light at `view`'s camera from above and below that its last submitted frame found
+    /// ([`AmbientLight`](crate::AmbientLight)); an error for an unknown view or before its first
+    /// frame. Waits for the GPU (a 32-byte copy after everything submitted so far): a host that
+    /// lights with it every frame binds [`FrameOutputs::ambient`] instead, or reads every few
+    /// frames.
+    pub fn read_ambient_light(&self, view: ViewId) -> Result<crate::AmbientLight> {
+        let state = self.views.get(view)?;
+        if state.history.layout.is_none() {
+            return Err(invalid_target(
+                "output",
+                "this view has not rendered a frame yet",
+            ));
+        }
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(&state.ambient, 0, &state.ambient_readback, 0, None);
+        self.queue.submit([encoder.finish()]);
+        let bytes = crate::gpu::readback::map_read(&self.device, &state.ambient_readback)?;
+        Ok(crate::AmbientLight::from_bytes(&bytes))
     }
 
     /// A view's resolved (or, with temporal reprojection off, fresh) cloud image.
@@ -1099,6 +1137,7 @@ struct ComputePasses {
     march_r32: MarchPipeline,
     temporal_depth: TemporalPipeline,
     temporal_r32: TemporalPipeline,
+    ambient: AmbientPipeline,
 }
 
 impl ComputePasses {
@@ -1108,6 +1147,7 @@ impl ComputePasses {
             march_r32: MarchPipeline::new(device, DepthKind::R32Float),
             temporal_depth: TemporalPipeline::new(device, DepthKind::Depth),
             temporal_r32: TemporalPipeline::new(device, DepthKind::R32Float),
+            ambient: AmbientPipeline::new(device),
         }
     }
 
@@ -1118,12 +1158,13 @@ impl ComputePasses {
         }
     }
 
-    fn caches(&mut self) -> [&mut crate::gpu::bind_cache::BindCache; 4] {
+    fn caches(&mut self) -> [&mut crate::gpu::bind_cache::BindCache; 5] {
         [
             &mut self.march_depth.binds,
             &mut self.march_r32.binds,
             &mut self.temporal_depth.binds,
             &mut self.temporal_r32.binds,
+            &mut self.ambient.binds,
         ]
     }
 
@@ -1133,6 +1174,7 @@ impl ComputePasses {
             &self.march_r32.binds,
             &self.temporal_depth.binds,
             &self.temporal_r32.binds,
+            &self.ambient.binds,
         ]
         .iter()
         .map(|b| b.created())

@@ -49,7 +49,7 @@ use crate::Error;
 /// Major version of the library; a context made with a header of another major version fails.
 pub const NIMBUS_VERSION_MAJOR: u32 = 0;
 /// Minor version.
-pub const NIMBUS_VERSION_MINOR: u32 = 6;
+pub const NIMBUS_VERSION_MINOR: u32 = 7;
 /// Patch version.
 pub const NIMBUS_VERSION_PATCH: u32 = 0;
 /// The oldest minor version of this major whose headers this library still serves.

@@ -1,5 +1,6 @@
 //! The per-frame outputs in the C API (contract version `NIMBUS_FRAME_OUTPUTS_VERSION`,
-//! docs/frame-outputs.md): what a view's last frame left besides the picture.
+//! docs/frame-outputs.md): what a view's last frame left besides the picture, and the light
+//! at its camera.
 
 use super::context::{check_chain, with_ctx};
 use super::shadows::check_float_count;
@@ -103,6 +104,62 @@ pub unsafe extern "C" fn nimbus_context_read_frame_outputs(
     }
 }
 
+/// The light at a view's camera from the hemisphere above and the one below, as its last
+/// submitted frame found it (docs/frame-outputs.md, "Ambient light"). For each hemisphere:
+/// the clouds' irradiance (rgb, linear, the sun's units) and the sky visibility in [0, 1], the
+/// share of the host's own light from that hemisphere (its sky above, its ground below) that
+/// still arrives through the clouds; the total is `cloud_irradiance + sky_visibility × host`.
+/// Since ABI 0.7.
+#[repr(C)]
+#[derive(Clone, Copy, Debug)]
+pub struct NimbusAmbientLight {
+    /// Must be NULL.
+    pub next: *const NimbusChainedStruct,
+    /// The clouds' irradiance on a surface facing up (rgb).
+    pub above_cloud_irradiance: [f32; 3],
+    /// The cosine-weighted transmittance of the clouds over the upper hemisphere.
+    pub above_sky_visibility: f32,
+    /// The clouds' irradiance on a surface facing down (clouds below a camera above them).
+    pub below_cloud_irradiance: [f32; 3],
+    /// The cosine-weighted transmittance of the clouds over the lower hemisphere.
+    pub below_sky_visibility: f32,
+}
+
+/// Writes the light at `view`'s camera (above and below) to `*out`. Waits for the GPU (a
+/// 32-byte copy after what was submitted): a host that lights with it every frame may read it
+/// every few frames. `NIMBUS_ERROR_NOT_READY` before the view's first frame;
+/// `NIMBUS_ERROR_INVALID_ARGUMENT` for an unknown view; `NIMBUS_ERROR_UNKNOWN_STRUCT` when
+/// `out->next` is not NULL. Since ABI 0.7.
+///
+/// Safety: `ctx` NULL or live; `out` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn nimbus_context_read_ambient_light(
+    ctx: *mut NimbusContext,
+    view: u32,
+    out: *mut NimbusAmbientLight,
+) -> NimbusResult {
+    // SAFETY: the caller guarantees a live context or NULL, and `out` writable or NULL.
+    unsafe {
+        with_ctx(ctx, |inner| {
+            let out = out.as_mut().ok_or_else(|| FfiError::null("out"))?;
+            check_chain(out.next, &[])?;
+            frame_outputs(inner, view)?;
+            let light = inner
+                .renderer_mut()
+                .read_ambient_light(crate::ViewId::from_raw(view))?;
+            inner.take_device_errors()?;
+            *out = NimbusAmbientLight {
+                next: out.next,
+                above_cloud_irradiance: light.above.cloud_irradiance.to_array(),
+                above_sky_visibility: light.above.sky_visibility,
+                below_cloud_irradiance: light.below.cloud_irradiance.to_array(),
+                below_sky_visibility: light.below.sky_visibility,
+            };
+            Ok(NIMBUS_OK)
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -121,5 +178,16 @@ mod tests {
         assert_eq!(offset_of!(NimbusFrameOutputs, grid_width), 12);
         assert_eq!(offset_of!(NimbusFrameOutputs, grid_height), 16);
         assert_eq!(offset_of!(NimbusFrameOutputs, has_cloud_shadows), 20);
+    }
+
+    /// Released with ABI 0.7.
+    #[test]
+    fn ambient_light_layout_is_pinned() {
+        use std::mem::{offset_of, size_of};
+        assert_eq!(size_of::<NimbusAmbientLight>(), 40);
+        assert_eq!(offset_of!(NimbusAmbientLight, above_cloud_irradiance), 8);
+        assert_eq!(offset_of!(NimbusAmbientLight, above_sky_visibility), 20);
+        assert_eq!(offset_of!(NimbusAmbientLight, below_cloud_irradiance), 24);
+        assert_eq!(offset_of!(NimbusAmbientLight, below_sky_visibility), 36);
     }
 }

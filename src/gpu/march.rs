@@ -314,6 +314,19 @@ pub(crate) fn medium_layout_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
     ]
 }
 
+/// The layout entries of the cloud shadow map the light march reads (shaders/march_ray.wgsl:
+/// the map at 10, where it lies at 11), for every pass built on `march_ray`.
+pub(crate) fn shadow_layout_entries() -> [wgpu::BindGroupLayoutEntry; 2] {
+    [
+        texture_entry(
+            10,
+            wgpu::TextureSampleType::Float { filterable: true },
+            wgpu::TextureViewDimension::D2,
+        ),
+        params_entry::<ShadowSampling>(11),
+    ]
+}
+
 /// The texture views the medium's bind group holds, in binding order (its cache key).
 pub(crate) fn medium_views<'a>(
     noise: &'a NoiseTextures,
@@ -382,10 +395,9 @@ impl MarchPipeline {
                     texture_entry(6, depth_type, D::D2),
                     storage_entry(7, wgpu::TextureFormat::Rgba16Float),
                     storage_entry(8, wgpu::TextureFormat::Rgba32Float),
-                    texture_entry(10, S::Float { filterable: true }, D::D2),
-                    params_entry::<ShadowSampling>(11),
                     storage_entry(12, wgpu::TextureFormat::Rg32Float),
                 ],
+                &shadow_layout_entries(),
             ]
             .concat(),
         );

@@ -1,6 +1,7 @@
 //! wgpu resources, pipelines and passes. Nothing here knows about C; everything here consumes
 //! the CPU domain modules (`atmosphere`, `lighting`, `weather`) through uniforms.
 
+pub(crate) mod ambient;
 pub(crate) mod bind_cache;
 pub(crate) mod blue_noise;
 pub(crate) mod composite;

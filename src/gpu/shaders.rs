@@ -28,7 +28,9 @@ pub(crate) const WEATHER_BLEND: (&str, &str) = shader!("weather_blend.wgsl");
 pub(crate) const MIP_DOWNSAMPLE: (&str, &str) = shader!("mip_downsample.wgsl");
 pub(crate) const MEDIUM: (&str, &str) = shader!("medium.wgsl");
 pub(crate) const DIFFUSION: (&str, &str) = shader!("diffusion.wgsl");
+pub(crate) const MARCH_RAY: (&str, &str) = shader!("march_ray.wgsl");
 pub(crate) const MARCH: (&str, &str) = shader!("march.wgsl");
+pub(crate) const AMBIENT: (&str, &str) = shader!("ambient.wgsl");
 pub(crate) const SHADOW: (&str, &str) = shader!("shadow.wgsl");
 pub(crate) const DENSITY_PROBE: (&str, &str) = shader!("density_probe.wgsl");
 pub(crate) const PATH_TRACE: (&str, &str) = shader!("path_trace.wgsl");
@@ -48,7 +50,13 @@ pub(crate) const PASSES: &[(&str, &[(&str, &str)])] = &[
     (
         "march",
         &[
-            COMMON, DEPTH, ATMOSPHERE, PHASE, DENSITY, MEDIUM, DIFFUSION, MARCH,
+            COMMON, DEPTH, ATMOSPHERE, PHASE, DENSITY, MEDIUM, DIFFUSION, MARCH_RAY, MARCH,
+        ],
+    ),
+    (
+        "ambient",
+        &[
+            COMMON, ATMOSPHERE, PHASE, DENSITY, MEDIUM, DIFFUSION, MARCH_RAY, AMBIENT,
         ],
     ),
     ("shadow", &[COMMON, ATMOSPHERE, DENSITY, MEDIUM, SHADOW]),

@@ -1,4 +1,4 @@
-//! GPU time of the march, temporal resolve, composite and cloud-shadow passes from timestamp queries (benchmarks only; never
+//! GPU time of the march, temporal resolve, composite, cloud-shadow and ambient passes from timestamp queries (benchmarks only; never
 //! in pass/fail tests). Lavapipe has timestamps, but cross-check them with wall time.
 
 use crate::error::Result;
@@ -15,6 +15,8 @@ pub struct PassTimes {
     /// The cloud shadow map's update (0 with the map off, or in frames of views other than
     /// the default one, which the map does not follow).
     pub shadow_ms: f64,
+    /// The ambient probe at the view's camera (docs/frame-outputs.md).
+    pub ambient_ms: f64,
 }
 
 pub(crate) struct GpuTimer {
@@ -31,9 +33,10 @@ pub(crate) enum Pass {
     Resolve = 1,
     Composite = 2,
     Shadow = 3,
+    Ambient = 4,
 }
 
-const QUERIES: u32 = 8;
+const QUERIES: u32 = 10;
 
 impl GpuTimer {
     /// A timer, or `None` when the device lacks `TIMESTAMP_QUERY`.
@@ -88,6 +91,7 @@ impl GpuTimer {
             resolve_ms: ms(2, 3),
             composite_ms: ms(4, 5),
             shadow_ms: ms(6, 7),
+            ambient_ms: ms(8, 9),
         })
     }
 }

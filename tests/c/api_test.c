@@ -440,6 +440,33 @@ static void test_cloud_shadows(void) {
         TRUE(bad == 0);
         free(px);
     }
+
+    /* Since ABI 0.7: the ambient light at the camera, above and below. */
+    {
+        NimbusAmbientLight al;
+        uint32_t view = 0;
+        int k;
+        memset(&al, 0, sizeof al);
+        EXPECT(nimbus_context_read_ambient_light(NULL, NIMBUS_VIEW_DEFAULT, &al), NIMBUS_ERROR_NULL_POINTER);
+        EXPECT_ON(ctx, nimbus_context_read_ambient_light(ctx, NIMBUS_VIEW_DEFAULT, NULL), NIMBUS_ERROR_NULL_POINTER);
+        EXPECT_MSG(ctx, nimbus_context_read_ambient_light(ctx, 0xdeadbeefu, &al), NIMBUS_ERROR_INVALID_ARGUMENT, "view");
+        EXPECT_ON(ctx, nimbus_context_create_view(ctx, &view), NIMBUS_OK);
+        EXPECT_MSG(ctx, nimbus_context_read_ambient_light(ctx, view, &al), NIMBUS_ERROR_NOT_READY, "not rendered");
+        EXPECT_ON(ctx, nimbus_context_destroy_view(ctx, view), NIMBUS_OK);
+        EXPECT_MSG(ctx, nimbus_context_read_ambient_light(ctx, view, &al), NIMBUS_ERROR_INVALID_ARGUMENT, "view");
+        al.next = &unknown;
+        EXPECT_ON(ctx, nimbus_context_read_ambient_light(ctx, NIMBUS_VIEW_DEFAULT, &al), NIMBUS_ERROR_UNKNOWN_STRUCT);
+        al.next = NULL;
+        EXPECT_ON(ctx, nimbus_context_read_ambient_light(ctx, NIMBUS_VIEW_DEFAULT, &al), NIMBUS_OK);
+        TRUE(al.next == NULL);
+        /* A camera on the ground under clouds: some sky hidden above, none below. */
+        TRUE(al.above_sky_visibility >= 0.0f && al.above_sky_visibility < 1.0f);
+        TRUE(al.below_sky_visibility == 1.0f);
+        for (k = 0; k < 3; k++) {
+            TRUE(isfinite(al.above_cloud_irradiance[k]) && al.above_cloud_irradiance[k] > 0.0f);
+            TRUE(al.below_cloud_irradiance[k] == 0.0f);
+        }
+    }
 }
 
 static void test_noise_cache(void) {

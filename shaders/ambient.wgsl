@@ -1,0 +1,132 @@
+// The ambient probe (compute): the light reaching the camera from each hemisphere around the
+// local vertical, from the clouds, as the march renders them (march_ray, shaders/march_ray.wgsl).
+//
+// Irradiance E = ∫ L(ω) cos θ dω over a hemisphere. With directions drawn cosine-weighted
+// (pdf cos θ / π) the estimate is E ≈ π / N Σ L_i, and the cosine-weighted mean transmittance
+// V = 1/π ∫ T(ω) cos θ dω ≈ 1/N Σ T_i is the fraction of the hemisphere's light that comes from
+// behind the clouds: the host's own sky above, its ground below. The host's irradiance is then
+// E_clouds + V × E_host (exact when the host's radiance is uniform over the hemisphere).
+// Directions: fixed spherical Fibonacci sets (Keinert et al. 2015), so the answer changes only
+// when the clouds, the sun or the camera do. AMBIENT_COSINE_RAYS are cosine-weighted (cos² θ
+// uniform). AMBIENT_SUN_RAYS follow the phase function's two lobes around the sun (each a
+// Henyey-Greenstein lobe with that lobe's asymmetry, in proportion to its weight): light
+// scattered through the clouds toward the sun comes in a peak as narrow as the phase function's
+// (about 1° for the default Jendersie-d'Eon fit, g = 0.988), which no cosine set of this size
+// resolves (34% off the integral of the picture at 128 cosine rays, tests/ambient.rs). The
+// sets are combined with the balance heuristic (Veach 1997): a ray in direction ω weighs
+// w = cos θ / Σ_k N_k p_k(ω), and E ≈ π Σ L_i w_i / Σ w_i, V ≈ Σ T_i w_i / Σ w_i (normalised by
+// Σ w, which is π up to the quadrature's error, so that a clear sky gives V = 1 exactly).
+
+// Per hemisphere (0 above, 1 below): rgb E_clouds (the sun's units × sr), a V.
+@group(0) @binding(13) var<storage, read_write> ambient_out: array<vec4f, 2>;
+
+const AMBIENT_THREADS: u32 = 64u;
+const AMBIENT_COSINE_RAYS: u32 = 128u;
+const AMBIENT_SUN_RAYS: u32 = 64u;
+const GOLDEN_ANGLE: f32 = 2.39996322973;
+
+var<workgroup> partial: array<vec4f, 64>;
+var<workgroup> partial_weight: array<f32, 64>;
+
+// Two unit vectors completing `axis` to an orthonormal basis.
+fn basis_of(axis: vec3f) -> mat2x3f {
+    let reference = select(vec3f(1.0, 0.0, 0.0), vec3f(0.0, 0.0, 1.0), abs(axis.x) > 0.9);
+    let b1 = normalize(cross(reference, axis));
+    return mat2x3f(b1, cross(axis, b1));
+}
+
+// The cosine from the axis of the sample with CDF value `xi` (HG inverted; uniform for g = 0).
+fn hg_cosine(xi: f32, g: f32) -> f32 {
+    if (abs(g) < 1e-3) {
+        return 1.0 - 2.0 * xi;
+    }
+    let q = (1.0 - g * g) / (1.0 - g + 2.0 * g * xi);
+    return clamp((1.0 + g * g - q * q) / (2.0 * g), -1.0, 1.0);
+}
+
+// The direction at cosine `c` from `axis` and azimuth `phi` around it.
+fn around(axis: vec3f, frame: mat2x3f, c: f32, phi: f32) -> vec3f {
+    let s = sqrt(max(1.0 - c * c, 0.0));
+    return normalize(frame[0] * (s * cos(phi)) + frame[1] * (s * sin(phi)) + axis * c);
+}
+
+// The lobe to draw sun ray `k` from: (asymmetry, rays in this lobe, index in it) for the
+// phase model's two lobes (phase.wgsl), and each lobe's ray count.
+struct SunLobes {
+    g: vec2f,
+    count: vec2f,
+}
+
+fn sun_lobes() -> SunLobes {
+    // model 0 (HG + Draine): HG(g_hg) weighs 1 - w, Draine(g_d) ~ HG(g_d) weighs w;
+    // model 1 (dual-lobe HG): forward weighs w, backward 1 - w.
+    let first_weight = select(u.phase.w, 1.0 - u.phase.w, u32(u.misc.y) == 0u);
+    let n = f32(AMBIENT_SUN_RAYS);
+    // At least 8 rays per lobe, so neither is left unsampled.
+    let first = clamp(round(first_weight * n), 8.0, n - 8.0);
+    return SunLobes(u.phase.xy, vec2f(first, n - first));
+}
+
+@compute @workgroup_size(64, 1, 1)
+fn ambient(@builtin(local_invocation_id) lid: vec3u, @builtin(workgroup_id) wg: vec3u) {
+    let cam = u.camera.xyz;
+    let sign = select(1.0, -1.0, wg.x == 1u);
+    let normal = sign * normalize(cam + u.planet.xyz * u.planet.w);
+    let normal_frame = basis_of(normal);
+    let sun = u.sun.xyz;
+    let sun_frame = basis_of(sun);
+    let lobes = sun_lobes();
+    let n_c = f32(AMBIENT_COSINE_RAYS);
+    // The solid angle one cosine ray stands for, 2π / N, as an angle; a quarter of it is the
+    // noise footprint (as the light march takes a quarter of its segment): the rays sample the
+    // clouds' detail rather than a blur of it, whose transmittance would be too low.
+    let pixel_angle = 0.25 * sqrt(2.0 * PI / n_c);
+    var sum = vec4f(0.0);
+    var weights = 0.0;
+    for (var i = lid.x; i < AMBIENT_COSINE_RAYS + AMBIENT_SUN_RAYS; i += AMBIENT_THREADS) {
+        var dir: vec3f;
+        if (i < AMBIENT_COSINE_RAYS) {
+            let k = f32(i);
+            dir = around(normal, normal_frame, sqrt((k + 0.5) / n_c), k * GOLDEN_ANGLE);
+        } else {
+            var k = f32(i - AMBIENT_COSINE_RAYS);
+            var lobe = 0u;
+            if (k >= lobes.count.x) {
+                k -= lobes.count.x;
+                lobe = 1u;
+            }
+            let xi = (k + 0.5) / lobes.count[lobe];
+            dir = around(sun, sun_frame, hg_cosine(xi, lobes.g[lobe]), k * GOLDEN_ANGLE);
+        }
+        let cos_n = dot(dir, normal);
+        if (cos_n <= 0.0) {
+            // A sun-lobe ray outside this hemisphere: weight 0.
+            continue;
+        }
+        let c = dot(dir, sun);
+        let density = n_c * cos_n / PI
+            + lobes.count.x * henyey_greenstein(c, lobes.g.x)
+            + lobes.count.y * henyey_greenstein(c, lobes.g.y);
+        let weight = cos_n / density;
+        light_samples = 0u;
+        // A fixed low-discrepancy offset per ray (no temporal accumulation here).
+        let jitter = fract(0.5 + f32(i) * 0.61803398875);
+        let ray = march_ray(cam, dir, u.layer.w, jitter, pixel_angle);
+        sum += weight * vec4f(ray.radiance, ray.transmittance);
+        weights += weight;
+    }
+    partial[lid.x] = sum;
+    partial_weight[lid.x] = weights;
+    workgroupBarrier();
+    for (var stride = AMBIENT_THREADS / 2u; stride > 0u; stride >>= 1u) {
+        if (lid.x < stride) {
+            partial[lid.x] += partial[lid.x + stride];
+            partial_weight[lid.x] += partial_weight[lid.x + stride];
+        }
+        workgroupBarrier();
+    }
+    if (lid.x == 0u) {
+        let total = partial[0] / partial_weight[0];
+        ambient_out[wg.x] = vec4f(total.rgb * PI, total.a);
+    }
+}

@@ -1,0 +1,338 @@
+// The march of one view ray (march_ray) and the light toward the sun it takes at each sample:
+// the body of the march pass (shaders/march.wgsl) and of the ambient probe (shaders/ambient.wgsl).
+// Binds 10-11 (the cloud shadow map) besides the medium's bindings.
+
+// The cloud shadow map (shaders/shadow.wgsl) and where it lies, for the light march's long
+// part (u.shadow_light.x on). A 1x1 stand-in with window.w = 0 when there is no map.
+struct ShadowSampling {
+    world_to_map: mat4x4f,
+    window: vec4f,          // xy: the square's origin in map coordinates, w: 1 once updated
+}
+@group(0) @binding(10) var shadow_map: texture_2d<f32>;
+@group(0) @binding(11) var<storage, read> shadow_sampling: ShadowSampling;
+
+// Density samples taken toward the sun by this invocation (the per-ray counter).
+var<private> light_samples: u32;
+
+struct Cirrus {
+    radiance: vec3f,
+    transmittance: f32,
+    distance: f32,
+}
+
+// The high layer: a textured sheet at one altitude, lit by single scattering through its
+// small optical depth (L = (1 - T) (E p + ambient) for a thin, non-absorbing sheet).
+fn cirrus_layer(cam: vec3f, dir: vec3f, max_t: f32, cos_theta: f32, sun_radiance: vec3f) -> Cirrus {
+    var none = Cirrus(vec3f(0.0), 1.0, 0.0);
+    let up = u.planet.xyz;
+    let radius = u.planet.w;
+    let h_cam = altitude(cam, up, radius);
+    let r = sphere_roots(cam, dir, up, radius, u.cirrus.y);
+    if (!r.hit) {
+        return none;
+    }
+    let t = select(r.t0, r.t1, h_cam < u.cirrus.y);
+    if (t <= 0.0 || t > max_t) {
+        return none;
+    }
+    let g = sphere_roots(cam, dir, up, radius, 0.0);
+    if (h_cam >= 0.0 && g.hit && g.t0 > 0.0 && g.t0 < t) {
+        return none;
+    }
+    let p = cam + dir * t;
+    let streak = weather_at(horizontal_of(p)).a;
+    let density = clamp(remap(streak, 1.0 - u.cirrus.x, 1.0, 0.0, 1.0), 0.0, 1.0);
+    let mu = max(abs(dot(normalize(p + up * radius), dir)), 0.05);
+    let transmittance = exp(-u.cirrus.z * density / mu);
+    // Ice crystals scatter less forward than droplets, and light bounces between crystals
+    // (Wrenninge-style): a flatter lobe, eccentricity scaled by 0.4.
+    let source = sun_radiance * phase_eval(u32(u.misc.y), u.phase, cos_theta, 0.4) + u.ambient_top.rgb;
+    return Cirrus((1.0 - transmittance) * source, transmittance, t);
+}
+
+fn haze_fade(distance: f32) -> f32 {
+    return exp(-max(distance - u.haze.w, 0.0) * u.misc.x);
+}
+
+// Light steps for a sample `distance` meters from the camera: with the light LOD on, one fewer
+// per doubling of the distance beyond 5 km (at least 2). Far clouds cover few pixels and their
+// self-shadowing is soft, so fewer, longer steps over the same length lose little.
+fn light_step_count(distance: f32) -> u32 {
+    let n = u32(u.ambient_bottom.w);
+    if (u.opts.w < 0.5 || distance <= 5000.0) {
+        return n;
+    }
+    let fewer = u32(floor(log2(distance / 5000.0)));
+    return max(n - min(fewer, n), min(n, 2u));
+}
+
+// Optical depth toward the sun: steps growing geometrically (ratio r = u.cirrus.w), partitioning
+// [0, exit] exactly so a homogeneous medium integrates without error. Short first steps resolve
+// the self-shadowing right at the sample, which is what the eye sees; long last steps catch the
+// bulk of the cloud between the sample and the sun. The planet's shadow is total.
+const LIGHT_DETAIL_DISTANCE: f32 = 150.0;
+fn sun_optical_depth(p: vec3f, n: u32, footprint: f32) -> f32 {
+    let d = u.sun.xyz;
+    let ground = sphere_roots(p, d, u.planet.xyz, u.planet.w, 0.0);
+    if (ground.hit && ground.t0 > 0.0) {
+        return 1e4;
+    }
+    var length_total = min(light_exit(p, d), u.ambient_top.w);
+    var n_steps = n;
+    // Beer shadow map light (Hillaire 2016; three-clouds' "BSM"): march only the first
+    // local meters, where the self-shadowing next to the sample lives, and read the optical
+    // depth from there to the sun from the map: min(mean extinction * (depth - front), total).
+    // The map covers the whole path (no light_distance cut). Outside its square: march.
+    var tau_map = 0.0;
+    if (u.shadow_light.x > 0.5 && shadow_sampling.window.w > 0.5) {
+        let local = min(u.shadow_light.y, light_exit(p, d));
+        let q = p + d * local;
+        let m = shadow_sampling.world_to_map * vec4f(q, 1.0);
+        let inside = m.xy - shadow_sampling.window.xy;
+        // Half a texel in from the square's edge, so that the bilinear footprint does not
+        // reach across the toroidal seam into the square's other side.
+        let margin = 0.5 / f32(textureDimensions(shadow_map).x);
+        if (all(inside >= vec2f(margin)) && all(inside < vec2f(1.0 - margin))) {
+            let t = textureSampleLevel(shadow_map, noise_sampler, m.xy, 0.0);
+            tau_map = min(t.g * max(m.z - t.r, 0.0), t.b);
+            length_total = local;
+            n_steps = u32(u.shadow_light.z);
+        }
+    }
+    let ratio = u.cirrus.w;
+    // First step of a geometric series of n steps summing to the total (uniform for r = 1).
+    var unit = length_total / f32(n_steps);
+    if (ratio > 1.0001) {
+        unit = length_total * (ratio - 1.0) / (pow(ratio, f32(n_steps)) - 1.0);
+    }
+    var t = 0.0;
+    var tau = 0.0;
+    var len = unit;
+    for (var i = 0u; i < n_steps; i++) {
+        // Light samples beyond LIGHT_DETAIL_DISTANCE only see the base shape: detail is
+        // invisible in a soft shadow (Schneider 2015), and it saves fetches. A fixed distance
+        // (rather than "after the second step") keeps the model the same for every step layout,
+        // so coarse and converged light marches estimate the same integral.
+        // A light sample stands for a segment of length `len`: a quarter of it is the widest
+        // footprint that keeps thin cloud parts from vanishing in the prefiltered noise.
+        let mid = t + 0.5 * len;
+        tau += sample_density(p + d * mid, mid > LIGHT_DETAIL_DISTANCE, max(footprint, 0.25 * len)) * len;
+        light_samples += 1u;
+        t += len;
+        len *= ratio;
+    }
+    return tau * u.shape.z + tau_map;
+}
+
+// Optical depth straight down from p (density sigma_t there) to the bottom of the medium,
+// for the independent-column diffuse model: exact for the debug slab and sphere; for the noise
+// model the column below is taken as dense as the sample, down to the layer's base.
+fn column_below(p: vec3f, local_up: vec3f, sigma_t: f32, body_density: f32) -> f32 {
+    let mode = debug_mode();
+    if (mode == DEBUG_SPHERE) {
+        let s = ball_segment(p, -local_up, u.debug_sphere.xyz, u.debug_sphere.w, 1e9);
+        return select(0.0, s.a.y, s.count > 0u) * sigma_t;
+    }
+    if (mode == DEBUG_SLAB) {
+        return max(altitude(p, u.planet.xyz, u.planet.w) - u.debug.x, 0.0) * sigma_t;
+    }
+    // The noise model: the column below is as dense as the cloud's body here (the base shape,
+    // which the detail erosion thins only at the edges).
+    let body = max(sigma_t, body_density * u.shape.z);
+    return max(altitude(p, u.planet.xyz, u.planet.w) - u.layer.x, 0.0) * body;
+}
+
+// One view ray from `cam` along `dir` up to `max_t` (m): the in-scattered radiance, the
+// transmittance and the depths the march pass writes for a pixel. Shared by the march (a
+// pixel's ray) and the ambient probe (a hemisphere of rays at the camera), so that the probe
+// sees exactly what the picture shows. `jitter` in [0, 1) places each sample inside its step;
+// `pixel_angle` (rad) is the angle one ray stands for, which sets the noise footprint.
+struct MarchRay {
+    radiance: vec3f,
+    transmittance: f32,
+    cloud_depth: f32,
+    front_depth: f32,
+    samples: u32,
+}
+
+fn march_ray(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32) -> MarchRay {
+    base_texel = 1.0 / (u.scales.x * f32(textureDimensions(base_tex).x));
+    detail_texel = 1.0 / (u.scales.y * f32(textureDimensions(detail_tex).x));
+    var samples = 0u;
+    let up = u.planet.xyz;
+    let radius = u.planet.w;
+    let seg = medium_segments(cam, dir, max_t);
+    let len_a = select(0.0, seg.a.y - seg.a.x, seg.count > 0u);
+    let len_b = select(0.0, seg.b.y - seg.b.x, seg.count > 1u);
+    let total = len_a + len_b;
+    let cos_theta = dot(u.sun.xyz, dir);
+    let sun_radiance = u.sun.w * u.sun_color.rgb;
+    var radiance = vec3f(0.0);
+    var transmittance = 1.0;
+    var cloud_depth = 0.0;
+    // Where the ray first met cloud (the start of the first step with density), 0 = never.
+    var front_depth = 0.0;
+    let clouds_possible = debug_mode() != DEBUG_OFF || u.shape.x > 0.0 || u.horizon.x > 0.0;
+    if (total > 0.0 && clouds_possible) {
+        // Step count grows with the length inside the layer (long horizon paths get more steps).
+        let thickness = u.layer.y - u.layer.x;
+        let n_f = mix(u.march.x, u.march.y, clamp(total / (4.0 * thickness), 0.0, 1.0));
+        let n = max(u32(ceil(n_f)), 1u);
+        // Steps grow with distance on long paths: sample k sits at s = total (k / n)^p, p from 1
+        // (paths up to a layer thick) to 2 (five layers and more), so the cloud around the camera
+        // is resolved finely and the far horizon coarsely. Consecutive positions partition
+        // [0, total] exactly, which keeps Hillaire's per-step integral energy-conserving.
+        var power = 1.0;
+        if (u.opts.y > 0.5) {
+            power = 1.0 + clamp((total - thickness) / (4.0 * thickness), 0.0, 1.0);
+        }
+
+        // Phase per multiple-scattering octave (Wrenninge: eccentricity scaled by c^i).
+        let octaves = u32(u.ms.x);
+        var phase_oct: array<f32, 8>;
+        var c_i = 1.0;
+        for (var i = 0u; i < octaves; i++) {
+            phase_oct[i] = phase_eval(u32(u.misc.y), u.phase, cos_theta, c_i);
+            c_i *= u.ms.w;
+        }
+        var depth_weighted = 0.0;
+        // Optical depth from where the ray entered the current cloud to the step start.
+        var tau_view = 0.0;
+        let delta_eddington_on = u32(u.ms_model.x) == 2u;
+        let inv_n = 1.0 / f32(n);
+        // Coarse-then-fine (Schneider 2015): while nothing has been found, steps COARSE times as
+        // long probe the cheap base-shape density, which bounds the full density from above, so
+        // an empty probe means an empty step. A hit steps back to the start of the coarse step
+        // and marches it finely; after FINE_EMPTY empty fine samples the ray goes coarse again.
+        // Every step, coarse or fine, is one interval of the same partition of [0, total]:
+        // skipped intervals count as empty, so the integral stays energy-conserving.
+        let coarse_on = u.opts.x > 0.5 && debug_mode() == DEBUG_OFF;
+        let coarse = select(1u, 4u, coarse_on);
+        const FINE_EMPTY: u32 = 4u;
+        var fine = !coarse_on;
+        var empty_run = 0u;
+        var i = 0u;
+        // Bounded: each fine step advances i; each coarse probe either advances i by `coarse`
+        // or switches to fine mode (at most once per run of fine steps).
+        for (var guard = 0u; guard < 3u * n + 8u && i < n; guard++) {
+            let steps = select(min(coarse, n - i), 1u, fine);
+            let x0 = f32(i) * inv_n;
+            let x1 = f32(i + steps) * inv_n;
+            let s = total * pow(x0 + jitter * (x1 - x0), power);
+            let dt = total * (pow(x1, power) - pow(x0, power));
+            let t = select(seg.b.x + (s - len_a), seg.a.x + s, s < len_a);
+            let p = cam + dir * t;
+            let footprint = t * pixel_angle;
+            samples += 1u;
+            if (!fine) {
+                if (sample_density(p, true, footprint) > 0.0) {
+                    fine = true;
+                    empty_run = 0u;
+                } else {
+                    i += steps;
+                }
+                continue;
+            }
+            i += 1u;
+            let density = sample_density(p, false, footprint);
+            // Before the light march's samples overwrite it.
+            let body_density = last_base_density;
+            if (density <= 0.0) {
+                empty_run += 1u;
+                if (coarse_on && empty_run >= FINE_EMPTY) {
+                    fine = false;
+                    tau_view = 0.0;
+                }
+                continue;
+            }
+            empty_run = 0u;
+            if (front_depth == 0.0) {
+                // The start of this step (not the jittered sample): the same for every visit.
+                let s0 = total * pow(x0, power);
+                front_depth = max(select(seg.b.x + (s0 - len_a), seg.a.x + s0, s0 < len_a), 1e-3);
+            }
+            let sigma_t = density * u.shape.z;
+            let tau = sun_optical_depth(p, light_step_count(t), footprint);
+            // Wrenninge 2015 multiple-scattering octaves.
+            var ms = 0.0;
+            var a_i = 1.0;
+            var b_i = 1.0;
+            for (var o = 0u; o < octaves; o++) {
+                ms += b_i * phase_oct[o] * exp(-a_i * tau);
+                a_i *= u.ms.y;
+                b_i *= u.ms.z;
+            }
+            let sample_tau_view = tau_view + 0.5 * sigma_t * dt;
+            if (delta_eddington_on) {
+                // The independent column through the sample (the local vertical): its top is
+                // tau * mu0 above (the light march's optical depth, projected), its bottom
+                // either the column below or, seen from below, where the view ray came in.
+                // A sun near or below the local horizon still lights a bounded cloud through
+                // its sides: the column is lit at no less than DE_MIN_MU0.
+                let local_up = normalize(p + up * radius);
+                let mu0 = max(dot(u.sun.xyz, local_up), DE_MIN_MU0);
+                let mu_view = dot(dir, local_up);
+                let column = column_below(p, local_up, sigma_t, body_density);
+                // Looking up, the view ray's own optical depth since it entered the cloud,
+                // projected on the vertical, is the column below as the ray measured it. Blended
+                // in over the first 15° above the horizon (no seam at the horizon).
+                let seen = min(column, sample_tau_view * max(mu_view, 0.0));
+                var below = mix(column, seen, smoothstep(0.0, 0.25, mu_view));
+                // Looking toward the sun, the camera sees the cloud's dark side: light escapes
+                // there through the boundary the view ray came in by, however the cloud is
+                // shaped, so that boundary is no farther than the ray's own optical depth
+                // (for a slab, never closer than the column: no change).
+                below = mix(below, min(below, sample_tau_view), smoothstep(0.0, 0.5, cos_theta));
+                ms += delta_eddington_source(tau, below, mu0, mu_view, cos_theta, u.shape.w, u.ms_model.y, phase_oct[0]);
+            }
+            let hf = clamp((altitude(p, up, radius) - u.layer.x) / thickness, 0.0, 1.0);
+            let ambient = mix(u.ambient_bottom.rgb, u.ambient_top.rgb, hf);
+            let source = u.shape.w * sigma_t * (sun_radiance * ms + ambient);
+            // Hillaire 2016 energy-conserving integration over the step.
+            let step_t = exp(-sigma_t * dt);
+            radiance += transmittance * source * (1.0 - step_t) / sigma_t;
+            depth_weighted += transmittance * (1.0 - step_t) * t;
+            transmittance *= step_t;
+            tau_view += sigma_t * dt;
+            if (transmittance < u.march.z) {
+                // Early exit with an estimate of what the rest of the ray would add: the medium
+                // ahead taken as this sample's, without end (∫ T e^{-σt x} S dx = T S / σt), so
+                // the light the remaining weight T would have gathered is not dropped. The
+                // transmittance is left as it is (the scene behind still shows through T).
+                radiance += transmittance * source / sigma_t;
+                break;
+            }
+        }
+
+        let opacity = 1.0 - transmittance;
+        if (opacity > 1e-4) {
+            cloud_depth = depth_weighted / opacity;
+            // Aerial perspective: distant clouds take the haze color.
+            let fade = haze_fade(cloud_depth);
+            radiance = radiance * fade + (1.0 - fade) * opacity * u.haze.rgb;
+        }
+    }
+
+    // The high layer, in front of or behind the main layer depending on where it is crossed.
+    if (debug_mode() == DEBUG_OFF && u.cirrus.x > 0.0) {
+        let c = cirrus_layer(cam, dir, max_t, cos_theta, sun_radiance);
+        if (c.transmittance < 1.0) {
+            let fade = haze_fade(c.distance);
+            let lc = c.radiance * fade + (1.0 - fade) * (1.0 - c.transmittance) * u.haze.rgb;
+            let in_front = seg.count == 0u || c.distance < seg.a.x;
+            if (in_front) {
+                radiance = lc + c.transmittance * radiance;
+            } else {
+                radiance = radiance + transmittance * lc;
+            }
+            if (cloud_depth == 0.0) {
+                cloud_depth = c.distance;
+            }
+            if (front_depth == 0.0 || c.distance < front_depth) {
+                front_depth = c.distance;
+            }
+            transmittance *= c.transmittance;
+        }
+    }
+    return MarchRay(radiance, transmittance, cloud_depth, front_depth, samples);
+}
