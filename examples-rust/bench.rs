@@ -11,6 +11,7 @@
 //!        cargo run --release --example bench -- [--quick] --views-only     (the views section)
 //!        cargo run --release --example bench -- --start-only               (the start section)
 //!        cargo run --release --example bench -- [--quick] --profile-only   (the frame's breakdown)
+//!        cargo run --release --example bench -- [--quick] --weather-only   (a weather request)
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -27,6 +28,8 @@ mod bench_profile;
 mod bench_start;
 #[path = "bench_views.rs"]
 mod bench_views;
+#[path = "bench_weather.rs"]
+mod bench_weather;
 
 const VIEW_NAMES: [&str; 4] = ["ground_up", "horizon", "inside", "above"];
 /// Frames a temporal configuration renders from a reset before its image is judged: the
@@ -574,6 +577,11 @@ fn run() -> Result<(), String> {
                 bench_start::start_section()?;
                 return Ok(());
             }
+            "--weather-only" => {
+                // Only the weather request section (printed).
+                bench_weather::weather_section(quick)?;
+                return Ok(());
+            }
             "--views-only" => {
                 // Only the several-cameras section (printed).
                 bench_views::views_section(quick)?;
@@ -598,7 +606,7 @@ fn run() -> Result<(), String> {
             }
             _ => {
                 return Err(format!(
-                "unexpected argument {a:?}; usage: bench [--quick] [--out DIR] [--views-only | --start-only | --profile-only] | --from-csv FILE"
+                "unexpected argument {a:?}; usage: bench [--quick] [--out DIR] [--views-only | --start-only | --profile-only | --weather-only] | --from-csv FILE"
             ))
             }
         }
@@ -672,27 +680,7 @@ fn run() -> Result<(), String> {
         scaling.push((s, m.march_ms + m.resolve_ms + m.composite_ms, m.wall_ms));
     }
 
-    // A weather transition's bake against a settled frame.
-    let bake_size = (320, 180);
-    let mut h = new_headless(bake_size)?;
-    let settings = settings_for(&Weather::cloudy(), Variant::Level(Quality::Medium));
-    let m = measure(&mut h, &standard_views()[0], 0.0, settings, true)?;
-    let frame_wall = m.wall_ms;
-    let t = Instant::now();
-    h.renderer_mut()
-        .set_weather(Weather::stormy(), 0.0, 20.0)
-        .map_err(|e| e.to_string())?;
-    h.renderer_mut()
-        .set_weather(Weather::clear(), 10.0, 20.0)
-        .map_err(|e| e.to_string())?;
-    h.device()
-        .poll(nimbus::wgpu::PollType::wait_indefinitely())
-        .map_err(|e| e.to_string())?;
-    let bake_ms = t.elapsed().as_secs_f64() * 1e3 / 2.0;
-    drop(h);
-    println!(
-        "weather request (generate + bake): {bake_ms:.2} ms wall, frame {frame_wall:.1} ms wall"
-    );
+    let weather_md = bench_weather::weather_section(quick)?;
 
     let (flight_size, flight_frames, checks): ((u32, u32), usize, Vec<usize>) = if quick {
         ((320, 180), 20, vec![16, 19])
@@ -733,12 +721,7 @@ fn run() -> Result<(), String> {
             wall / mp
         );
     }
-    let _ = writeln!(
-        md,
-        "\n## Weather transition\n\nOne request (new map generated, running blend baked): {bake_ms:.2} ms wall, against a \
-         {frame_wall:.1} ms frame (320x180, medium). Spread over a 20 s transition at 30 fps that is {:.4}% of the frames' time.\n",
-        100.0 * bake_ms / (frame_wall * 600.0)
-    );
+    md.push_str(&weather_md);
     let _ = writeln!(
         md,
         "## Moving-camera flight ({}x{}, cloudy, medium; 150 m/s level flight panning 45 degrees/s at 30 fps, from a reset history; FLIP against a converged reference of the same frame)\n\n| frame | wall ms | FLIP mean | FLIP p99 |\n|---|---|---|---|",

@@ -100,7 +100,13 @@ fn run() -> Result<(), String> {
     let out = out.ok_or("usage: weather_tour OUT_DIR [--size WIDTHxHEIGHT]")?;
     std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
 
-    let mut h = Headless::new(Settings::default()).map_err(|e| e.to_string())?;
+    // The sheet jumps from preset to preset: each map at once, in its request, so that every
+    // row's frames see its weather from the first (a game's requests take 8 frames instead).
+    let mut h = Headless::new(Settings {
+        weather_map_texels_per_frame: 0,
+        ..Settings::default()
+    })
+    .map_err(|e| e.to_string())?;
     h.resize(size.0, size.1).map_err(|e| e.to_string())?;
 
     let presets = [

@@ -252,6 +252,14 @@
 #define NIMBUS_TRANSITION_DONE 3
 
 /*
+ `NimbusWeatherState.phase`: the requested weather's map is still being generated, a slice
+ per frame; the transition starts once it is ready, at the later of its requested start
+ and that frame's time. `from_name` is the sky now, `to_name` the request, `start` its
+ requested start. Since ABI 0.7 (a context made with an older header reads SCHEDULED).
+ */
+#define NIMBUS_TRANSITION_PENDING 4
+
+/*
  Largest preset (file or text) accepted, in bytes.
  */
 #define NIMBUS_MAX_PRESET_BYTES 65536
@@ -1274,6 +1282,10 @@ NimbusResult nimbus_context_resize(struct NimbusContext *ctx, uint32_t width, ui
  option flags) at host time `start` seconds, lasting `duration` seconds (0 = at once). A
  transition already running is frozen where it is and continued from, so the sky never
  jumps. Requests must come in time order.
+ The preset's weather map is generated a slice per frame (8 frames at the default size),
+ so the request costs no frame a hitch: until it is ready `nimbus_context_weather_state`
+ says `NIMBUS_TRANSITION_PENDING`, then the transition starts at the later of `start` and
+ that frame's time. Requests made meanwhile wait their turn, in order.
 
  Safety: `ctx` must be NULL or a live context.
  */

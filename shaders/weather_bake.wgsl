@@ -3,7 +3,8 @@
 struct BakeParams {
     seed: u32,
     size: u32,
-    _pad0: u32,
+    // The first row this dispatch writes (a generation in slices over frames).
+    row_offset: u32,
     _pad1: u32,
     // Cloud cells across the tile per layer (xyz); w unused.
     frequency: vec4u,
@@ -28,16 +29,17 @@ fn layer_coverage(p: vec3f, freq: u32, amount: f32, seed: u32) -> f32 {
 }
 
 @compute @workgroup_size(8, 8, 1)
-fn bake_weather(@builtin(global_invocation_id) id: vec3u) {
-    if (any(id.xy >= vec2u(params.size))) {
+fn bake_weather(@builtin(global_invocation_id) gid: vec3u) {
+    let id = vec2u(gid.x, gid.y + params.row_offset);
+    if (any(id >= vec2u(params.size))) {
         return;
     }
-    let p = vec3f((vec2f(id.xy) + 0.5) / f32(params.size), 0.0);
+    let p = vec3f((vec2f(id) + 0.5) / f32(params.size), 0.0);
     let s = params.seed * 64u;
     let r = layer_coverage(p, params.frequency.x, params.amount.x, s);
     let g = layer_coverage(p, params.frequency.y, params.amount.y, s + 16u);
     let b = layer_coverage(p, params.frequency.z, params.amount.z, s + 32u);
     // Cirrus: streaks, long along x and thin across.
     let cirrus = perlin_fbm3(p, vec3i(2, 11, 1), 4, 0.55, s + 48u);
-    textureStore(map_out, id.xy, vec4f(r, g, b, smoothstep(0.35, 0.8, cirrus)));
+    textureStore(map_out, id, vec4f(r, g, b, smoothstep(0.35, 0.8, cirrus)));
 }

@@ -119,7 +119,28 @@ pub struct Renderer {
     query_data: Option<std::sync::Arc<crate::query::QueryData>>,
     /// Whether the noise volumes in use came from a noise cache (not baked).
     noise_from_cache: bool,
+    /// Weather requests waiting for their maps, in request order (see `set_weather`); the
+    /// first one's map is being generated.
+    pending_weather: PendingWeather,
 }
+
+/// A weather request waiting for its map: it enters the timeline once the map is ready.
+struct WeatherRequest {
+    weather: Weather,
+    start: f64,
+    duration: f64,
+}
+
+/// The requests waiting for their maps and the generation of the first one's.
+#[derive(Default)]
+struct PendingWeather {
+    requests: std::collections::VecDeque<WeatherRequest>,
+    /// The first request's map in the making (made when it became first).
+    generation: Option<crate::gpu::weather::Generation>,
+}
+
+/// Most weather requests that may wait for their maps at once.
+const MAX_PENDING_WEATHER: usize = 64;
 
 /// Where a new renderer's noise volumes come from (see [`crate::noise_cache`]).
 #[derive(Clone, Copy, Debug, Default)]
@@ -435,6 +456,7 @@ impl Renderer {
                 no_shadow: NoShadow::new(device),
                 query_data: None,
                 noise_from_cache: cache.is_some(),
+                pending_weather: PendingWeather::default(),
             }
         })
     }
@@ -521,6 +543,9 @@ impl Renderer {
             self.timeline
                 .replace(settings.weather.clone(), self.last_time);
         }
+        // Pending requests survive a settings change: the first one's map starts again, on
+        // the new maps and budget, in the next prepare.
+        self.pending_weather.generation = None;
         if bake_changed || map_changed {
             // Cached bind groups hold the replaced textures' views.
             self.clear_bind_groups();
@@ -574,17 +599,60 @@ impl Renderer {
     /// Starts a transition to `weather`, beginning at host time `start` (seconds, the clock of
     /// [`FrameInputs::time`]) and lasting `duration` seconds (0 = at once). If a transition is
     /// running, its current blend is baked into a texture and becomes the starting point, so
-    /// the sky never jumps. Requests must come in time order. Submits its own small GPU work
-    /// (map generation and the bake) on the queue. On error nothing changes.
+    /// the sky never jumps. Requests must come in time order. On error nothing changes.
+    ///
+    /// The new weather's map is generated on the GPU. When it has more texels than
+    /// [`Settings::weather_map_texels_per_frame`] (the default 512² map does), it is generated
+    /// a slice per [`Renderer::prepare`] (8 frames by default), so that no frame pays for the
+    /// whole map, and the request enters the timeline once the map is ready: the transition
+    /// starts at the later of `start` and that frame's time, and until then
+    /// [`Renderer::weather_state`] says [`TransitionPhase::Pending`](crate::weather::TransitionPhase::Pending).
+    /// Requests made while others wait queue behind them, in order (at most 64); one whose
+    /// successor's start has already come when its turn arrives is skipped. Otherwise the map
+    /// is generated here at once (its own small submission) and the transition starts
+    /// exactly at `start`.
     pub fn set_weather(&mut self, weather: Weather, start: f64, duration: f64) -> Result<()> {
         weather.validate()?;
+        // The request must be valid now (time order included, against a pending one too),
+        // whenever it enters the timeline.
         let mut timeline = self.timeline.clone();
         let action = timeline.request(weather.clone(), start, duration)?;
+        if let Some(last) = self.pending_weather.requests.back() {
+            if start < last.start {
+                return Err(Error::InvalidWeather(format!(
+                    "request at t={start} is earlier than the pending request's start t={}; \
+                     requests must come in time order",
+                    last.start
+                )));
+            }
+        }
         let (device, queue) = (self.device.clone(), self.queue.clone());
+        let budget = self.settings.weather_map_texels_per_frame;
+        // Behind a pending request a request waits its turn, whatever its map's size.
+        if self.weather_maps.needs_slices(budget) || !self.pending_weather.requests.is_empty() {
+            if self.pending_weather.requests.len() == MAX_PENDING_WEATHER {
+                return Err(Error::InvalidWeather(format!(
+                    "{MAX_PENDING_WEATHER} weather requests already wait for their maps"
+                )));
+            }
+            self.pending_weather.requests.push_back(WeatherRequest {
+                weather,
+                start,
+                duration,
+            });
+            return Ok(());
+        }
         let slots = gpu_scope(&device, || {
             self.weather_maps.apply(&device, &queue, action, &weather)
         })?;
         // Only now, with the GPU work accepted, do the maps and the timeline move together.
+        self.enter_weather(slots, timeline, duration);
+        Ok(())
+    }
+
+    /// Makes `slots` the weather maps and `timeline` the timeline, after a request's map
+    /// work was accepted.
+    fn enter_weather(&mut self, slots: (usize, usize), timeline: Timeline, duration: f64) {
         self.weather_maps.commit(slots);
         self.timeline = timeline;
         self.query_data = None;
@@ -594,13 +662,89 @@ impl Renderer {
                 pass.plan.invalidate();
             }
         }
+    }
+
+    /// Generates the next slice of the first pending request's map (one submission); once
+    /// the map is complete the request enters the timeline at max(its start, `now`). A
+    /// request whose successor's start has come (`now` ≥ it) is skipped if its map is not
+    /// begun: it would show for a few frames at most, and the successor moves on from the
+    /// sky as it is. So requests made every frame never pile up (at most the one being made
+    /// and the latest wait), and the one being made always finishes.
+    fn advance_weather(&mut self, now: f64) -> Result<()> {
+        let pending = &mut self.pending_weather;
+        loop {
+            let r = &pending.requests;
+            if r.len() >= 3 && r[2].start <= now {
+                // Waiting behind the first, and overtaken: never shown.
+                pending.requests.remove(1);
+            } else if r.len() >= 2 && pending.generation.is_none() && r[1].start <= now {
+                // First, its map not begun, and overtaken.
+                pending.requests.pop_front();
+            } else {
+                break;
+            }
+        }
+        let Some(request) = pending.requests.front() else {
+            return Ok(());
+        };
+        let (device, queue) = (self.device.clone(), self.queue.clone());
+        let budget = match self.settings.weather_map_texels_per_frame {
+            b if self.weather_maps.needs_slices(b) => b,
+            _ => u32::MAX,
+        };
+        let maps = &self.weather_maps;
+        let timeline = &self.timeline;
+        let generation = &mut pending.generation;
+        let entered = gpu_scope(&device, || {
+            let g = generation
+                .get_or_insert_with(|| maps.begin_generation(&device, &request.weather, budget));
+            let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
+                label: Some("nimbus weather slice"),
+            });
+            maps.record_slice(&mut encoder, g);
+            let mut entered = None;
+            if g.done() {
+                // The timeline cannot refuse it: the request was checked when made, and a
+                // later start (the map's readiness, or a settings change's reset since)
+                // keeps the time order.
+                let start = request.start.max(now).max(timeline.state(now).start);
+                let mut timeline = timeline.clone();
+                let action = timeline
+                    .request(request.weather.clone(), start, request.duration)
+                    .unwrap_or_else(|e| unreachable!("a checked request was refused: {e}"));
+                entered = Some((
+                    maps.settle_generated(&device, &mut encoder, action, g),
+                    timeline,
+                ));
+            }
+            queue.submit([encoder.finish()]);
+            entered
+        });
+        let entered = match entered {
+            Ok(e) => e,
+            Err(e) => {
+                // The request is dropped with the error; the ones behind it go on.
+                self.pending_weather.requests.pop_front();
+                self.pending_weather.generation = None;
+                return Err(e);
+            }
+        };
+        if let Some((slots, timeline)) = entered {
+            let request = self
+                .pending_weather
+                .requests
+                .pop_front()
+                .unwrap_or_else(|| unreachable!("the request entered was first"));
+            self.pending_weather.generation = None;
+            self.enter_weather(slots, timeline, request.duration);
+        }
         Ok(())
     }
 
     /// Stops the weather where it is at host time `now`: a running transition freezes at its
-    /// current blend (baked on the GPU), a scheduled one is dropped, and the sky holds until
-    /// the next [`Renderer::set_weather`]. Submits its own small GPU work. On error nothing
-    /// changes.
+    /// current blend (baked on the GPU), a scheduled or pending one is dropped, and the sky
+    /// holds until the next [`Renderer::set_weather`]. Submits its own small GPU work. On
+    /// error nothing changes.
     pub fn cancel_weather(&mut self, now: f64) -> Result<()> {
         let mut timeline = self.timeline.clone();
         let action = timeline.hold(now)?;
@@ -609,12 +753,43 @@ impl Renderer {
         self.weather_maps.commit(slots);
         self.timeline = timeline;
         self.query_data = None;
+        self.pending_weather = PendingWeather::default();
         Ok(())
     }
 
-    /// The transition as seen at host time `time`: from and to, progress and phase.
+    /// The transition as seen at host time `time`: from and to, progress and phase. While a
+    /// request's map is being generated: phase `Pending`, `from` the sky as it is, `to`,
+    /// `start` and `duration` the request's, progress 0.
     pub fn weather_state(&self, time: f64) -> crate::weather::TransitionState {
-        self.timeline.state(time)
+        let state = self.timeline.state(time);
+        match self.pending_weather.requests.front() {
+            None => state,
+            Some(p) => crate::weather::TransitionState {
+                from: if state.progress < 0.5 {
+                    state.from
+                } else {
+                    state.to
+                },
+                to: p.weather.name.clone(),
+                start: p.start,
+                duration: p.duration,
+                progress: 0.0,
+                phase: crate::weather::TransitionPhase::Pending,
+            },
+        }
+    }
+
+    /// The share of the first pending request's map generated so far, in [0, 1); `None`
+    /// when no request is waiting for its map.
+    pub fn pending_weather_progress(&self) -> Option<f32> {
+        let p = &self.pending_weather;
+        p.requests.front()?;
+        Some(p.generation.as_ref().map_or(0.0, |g| g.progress()))
+    }
+
+    /// How many weather requests wait for their maps (see [`Renderer::set_weather`]).
+    pub fn pending_weather_count(&self) -> usize {
+        self.pending_weather.requests.len()
     }
 
     /// The weather at host time `time`: blended scalars, map weight and wind displacement.
@@ -631,9 +806,11 @@ impl Renderer {
 
     /// [`Renderer::prepare`] for one view.
     pub fn prepare_view(&mut self, view: ViewId, frame: &FrameInputs) -> Result<()> {
-        let state = self.views.get_mut(view)?;
-        state.pending = None;
+        self.views.get_mut(view)?.pending = None;
         let (camera, sun_dir) = frame.validate()?;
+        // A pending weather request's next map slice (and its entry once the map is ready).
+        self.advance_weather(frame.time)?;
+        let state = self.views.get_mut(view)?;
         let sample = self.timeline.sample(frame.time);
         self.last_time = frame.time;
         let march = MarchUniforms::new(&self.settings, &sample, frame, &camera, sun_dir, false);

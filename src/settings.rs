@@ -30,6 +30,14 @@ pub struct Settings {
     pub debug_density: DebugDensity,
     /// The cloud shadow map handed to the host (off by default).
     pub shadows: CloudShadows,
+    /// How many texels of a requested weather's map `Renderer::set_weather` generates per
+    /// frame. A map larger than this is generated in slices of whole rows, one per
+    /// `prepare`, so that no single frame pays for the whole map (a 512² map costs about
+    /// 0.2 s on a 2-core software rasteriser); the transition then starts once the map is
+    /// ready, at the later of its requested start and that frame's time. A map that fits
+    /// (or 0 = no limit) is generated at once in the request, which the transition then
+    /// starts exactly at. Default 32768: a 512² map over 8 frames, a 128² one at once.
+    pub weather_map_texels_per_frame: u32,
 }
 
 /// The cloud shadow map: the clouds' optical depth toward the sun over a square around the
@@ -491,6 +499,7 @@ impl Default for Settings {
             haze: Haze::default(),
             debug_density: DebugDensity::Off,
             shadows: CloudShadows::default(),
+            weather_map_texels_per_frame: 32_768,
         }
     }
 }

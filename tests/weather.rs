@@ -289,3 +289,194 @@ fn cancel_holds_the_sky_as_it_is_and_drops_what_was_scheduled() {
     assert_eq!(h.renderer().weather_at(200.0).weather, before.weather);
     assert!(h.renderer_mut().cancel_weather(f64::NAN).is_err());
 }
+
+/// 128² maps in slices of 16 rows: 8 prepares per request.
+fn sliced(mut s: Settings) -> Settings {
+    s.weather_map_texels_per_frame = 2048;
+    s
+}
+
+fn at_once(mut s: Settings) -> Settings {
+    s.weather_map_texels_per_frame = 0;
+    s
+}
+
+fn phase(h: &Headless, t: f64) -> nimbus::weather::TransitionPhase {
+    h.renderer().weather_state(t).phase
+}
+
+#[test]
+fn a_map_made_over_frames_equals_the_one_made_at_once_and_enters_when_ready() {
+    use nimbus::weather::TransitionPhase::{Pending, Running, Scheduled};
+    let mut slow = headless(quiet(sliced(small_noise(1))));
+    let mut fast = headless(quiet(at_once(small_noise(1))));
+    for h in [&mut slow, &mut fast] {
+        render(h, 0, 0.0);
+        h.renderer_mut()
+            .set_weather(Weather::stormy(), 2.0, 4.0)
+            .unwrap();
+    }
+    assert_eq!(phase(&fast, 1.0), Scheduled);
+    let state = slow.renderer().weather_state(3.0);
+    assert_eq!(
+        (state.phase, state.to.as_str(), state.start, state.progress),
+        (Pending, "stormy", 2.0, 0.0)
+    );
+    assert_eq!(slow.renderer().pending_weather_progress(), Some(0.0));
+    // Seven frames make seven of the eight slices; the sky is still the old one.
+    let before = slow.read_weather_maps().unwrap();
+    for i in 1..8 {
+        render(&mut slow, 0, 0.1 * i as f64);
+        assert_eq!(phase(&slow, 3.0), Pending, "frame {i}");
+    }
+    assert_eq!(slow.renderer().pending_weather_progress(), Some(7.0 / 8.0));
+    assert_eq!(
+        slow.read_weather_maps().unwrap(),
+        before,
+        "in use maps untouched"
+    );
+    // The eighth finishes the map: the request enters at its own start (2 s > 0.8 s).
+    render(&mut slow, 0, 0.8);
+    assert_eq!(slow.renderer().pending_weather_progress(), None);
+    assert_eq!(phase(&slow, 3.0), Running);
+    assert_eq!(slow.renderer().weather_state(3.0).start, 2.0);
+    assert_eq!(
+        slow.read_weather_maps().unwrap(),
+        fast.read_weather_maps().unwrap(),
+        "the map made in slices is the map made at once, byte for byte"
+    );
+    assert_eq!(render(&mut slow, 0, 4.0), render(&mut fast, 0, 4.0));
+}
+
+#[test]
+fn a_map_ready_after_the_requested_start_starts_the_transition_then() {
+    let mut h = headless(quiet(sliced(small_noise(1))));
+    render(&mut h, 0, 10.0);
+    h.renderer_mut()
+        .set_weather(Weather::overcast(), 10.0, 5.0)
+        .unwrap();
+    for i in 0..8 {
+        render(&mut h, 0, 10.0 + 0.5 * i as f64);
+    }
+    // Ready at the eighth frame, 13.5 s: the transition runs from there, for its 5 s.
+    let state = h.renderer().weather_state(14.0);
+    assert_eq!(state.phase, nimbus::weather::TransitionPhase::Running);
+    assert_eq!((state.start, state.duration), (13.5, 5.0));
+    assert!(h.renderer().weather_at(13.5).map_weight == 0.0);
+}
+
+#[test]
+fn an_interrupting_request_made_over_frames_does_not_pop() {
+    // The same requests on maps made in slices and at once: the same skies, frame by frame,
+    // once each request has entered.
+    let mut slow = headless(quiet(sliced(small_noise(1))));
+    let mut fast = headless(quiet(at_once(small_noise(1))));
+    for h in [&mut slow, &mut fast] {
+        h.renderer_mut()
+            .set_weather(Weather::stormy(), 1.0, 10.0)
+            .unwrap();
+        for i in 0..8 {
+            render(h, 0, 0.1 * i as f64);
+        }
+    }
+    let mid = render(&mut slow, 0, 5.0);
+    assert_eq!(mid, render(&mut fast, 0, 5.0));
+    // Interrupted at 5 s: the frozen blend becomes the start of the way to clear.
+    for h in [&mut slow, &mut fast] {
+        h.renderer_mut()
+            .set_weather(Weather::clear(), 5.0, 10.0)
+            .unwrap();
+    }
+    // While the map is made the sky is exactly as it was...
+    for i in 0..7 {
+        assert_eq!(
+            render(&mut slow, 0, 5.0),
+            mid,
+            "frame {i} of the generation"
+        );
+    }
+    // ...and then it is what the request made at once gives (which a test above checks
+    // against the pictures around the interruption).
+    let entered = render(&mut slow, 0, 5.0);
+    let state = slow.renderer().weather_state(5.0);
+    assert_eq!(
+        (state.phase, state.start),
+        (nimbus::weather::TransitionPhase::Running, 5.0)
+    );
+    assert_eq!(entered, render(&mut fast, 0, 5.0));
+    assert_eq!(
+        slow.read_weather_maps().unwrap(),
+        fast.read_weather_maps().unwrap()
+    );
+    assert_eq!(render(&mut slow, 0, 9.0), render(&mut fast, 0, 9.0));
+}
+
+#[test]
+fn pending_requests_queue_in_order_skip_stale_ones_cancel_and_survive_settings() {
+    use nimbus::weather::TransitionPhase::{Done, Pending, Running};
+    let mut h = headless(quiet(sliced(small_noise(1))));
+    render(&mut h, 0, 0.0);
+    let r = h.renderer_mut();
+    r.set_weather(Weather::stormy(), 5.0, 1.0).unwrap();
+    // In time order against the pending request too; a refused one changes nothing.
+    assert!(matches!(
+        r.set_weather(Weather::clear(), 4.0, 1.0),
+        Err(Error::InvalidWeather(_))
+    ));
+    // A later one waits its turn: the timeline then holds both, as if made at once.
+    r.set_weather(Weather::overcast(), 6.0, 1.0).unwrap();
+    assert_eq!(r.pending_weather_count(), 2);
+    assert_eq!(r.weather_state(0.0).to, "stormy");
+    for i in 0..16 {
+        render(&mut h, 0, 0.1 + 0.01 * i as f64);
+    }
+    assert_eq!(h.renderer().pending_weather_count(), 0);
+    assert_eq!(h.renderer().weather_state(6.5).to, "overcast");
+    assert_eq!(h.renderer().weather_state(6.5).phase, Running);
+    let mut reference = headless(quiet(at_once(small_noise(1))));
+    render(&mut reference, 0, 0.0);
+    for (w, t) in [(Weather::stormy(), 5.0), (Weather::overcast(), 6.0)] {
+        reference.renderer_mut().set_weather(w, t, 1.0).unwrap();
+    }
+    for t in [5.5, 6.5, 8.0] {
+        assert_eq!(
+            h.renderer().weather_at(t),
+            reference.renderer().weather_at(t),
+            "t = {t}"
+        );
+    }
+
+    // A request whose successor's start has come is skipped (unless its map is under way):
+    // requests every frame do not pile up; the first one's map goes on being made.
+    for i in 0..5 {
+        let t = 10.0 + i as f64;
+        h.renderer_mut()
+            .set_weather(Weather::cloudy(), t, 1.0)
+            .unwrap();
+        render(&mut h, 0, t);
+    }
+    assert_eq!(h.renderer().pending_weather_count(), 2);
+    assert_eq!(h.renderer().pending_weather_progress(), Some(5.0 / 8.0));
+    // A settings change keeps it: its map starts again with the new budget (here: at once).
+    let s = at_once(h.renderer().settings().clone());
+    h.renderer_mut().set_settings(s).unwrap();
+    assert_eq!(phase(&h, 14.0), Pending);
+    render(&mut h, 0, 14.0);
+    assert_eq!(h.renderer().pending_weather_count(), 0);
+    assert_eq!(h.renderer().weather_state(14.5).to, "cloudy");
+    assert_eq!(h.renderer().weather_state(14.5).start, 14.0);
+
+    // A cancel drops pending requests.
+    let s = sliced(h.renderer().settings().clone());
+    h.renderer_mut().set_settings(s).unwrap();
+    h.renderer_mut()
+        .set_weather(Weather::clear(), 20.0, 1.0)
+        .unwrap();
+    assert_eq!(phase(&h, 20.0), Pending);
+    h.renderer_mut().cancel_weather(16.0).unwrap();
+    assert_eq!(phase(&h, 30.0), Done);
+    for i in 0..9 {
+        render(&mut h, 0, 16.0 + i as f64);
+    }
+    assert_eq!(h.renderer().weather_at(30.0).weather.name, "cloudy");
+}

@@ -48,6 +48,8 @@ pub(crate) struct ContextInner {
     /// `NimbusVulkanDeviceExt`.
     vulkan: Option<super::vulkan::VulkanHost>,
     adapter_name: CString,
+    /// The minor ABI version of the header the context was made with (what it may be told).
+    abi_minor: u32,
 }
 
 /// Runs `f` on a live, unpoisoned context inside the panic boundary, keeping the context's
@@ -346,6 +348,7 @@ fn decode_desc(desc: &NimbusContextDesc) -> FfiResult<DecodedDesc> {
         // SAFETY: the chain link is a NimbusVulkanDeviceExt (its s_type) per the caller.
         let host = unsafe { super::vulkan::host_device(&*ext) }?;
         return Ok(DecodedDesc {
+            abi_minor: minor,
             settings,
             target: None,
             host: Some(host),
@@ -360,6 +363,7 @@ fn decode_desc(desc: &NimbusContextDesc) -> FfiResult<DecodedDesc> {
         None => None,
     };
     Ok(DecodedDesc {
+        abi_minor: minor,
         settings,
         target,
         host: None,
@@ -370,6 +374,8 @@ fn decode_desc(desc: &NimbusContextDesc) -> FfiResult<DecodedDesc> {
 /// What a creation descriptor asks for: settings, a window or the host's Vulkan device, and
 /// where the noise volumes come from.
 struct DecodedDesc {
+    /// The header's minor ABI version.
+    abi_minor: u32,
     settings: Settings,
     target: Option<wgpu::SurfaceTargetUnsafe>,
     host: Option<crate::vulkan::HostDevice>,
@@ -441,6 +447,7 @@ pub mod fuzzing {
 impl ContextInner {
     fn create(desc: &NimbusContextDesc) -> FfiResult<Self> {
         let DecodedDesc {
+            abi_minor,
             settings,
             target,
             host,
@@ -488,6 +495,7 @@ impl ContextInner {
             errors,
             presenter,
             vulkan,
+            abi_minor,
         })
     }
 
@@ -870,6 +878,10 @@ fn weather_with(mut w: Weather, options: u32) -> FfiResult<Weather> {
 /// option flags) at host time `start` seconds, lasting `duration` seconds (0 = at once). A
 /// transition already running is frozen where it is and continued from, so the sky never
 /// jumps. Requests must come in time order.
+/// The preset's weather map is generated a slice per frame (8 frames at the default size),
+/// so the request costs no frame a hitch: until it is ready `nimbus_context_weather_state`
+/// says `NIMBUS_TRANSITION_PENDING`, then the transition starts at the later of `start` and
+/// that frame's time. Requests made meanwhile wait their turn, in order.
 ///
 /// Safety: `ctx` must be NULL or a live context.
 #[no_mangle]
@@ -1034,6 +1046,11 @@ pub unsafe extern "C" fn nimbus_context_weather_state(
                 duration: s.duration,
                 progress: s.progress,
                 phase: match s.phase {
+                    // A header before 0.7 has no PENDING: for it the request is scheduled.
+                    crate::weather::TransitionPhase::Pending if inner.abi_minor >= 7 => {
+                        NIMBUS_TRANSITION_PENDING
+                    }
+                    crate::weather::TransitionPhase::Pending => NIMBUS_TRANSITION_SCHEDULED,
                     crate::weather::TransitionPhase::Scheduled => NIMBUS_TRANSITION_SCHEDULED,
                     crate::weather::TransitionPhase::Running => NIMBUS_TRANSITION_RUNNING,
                     crate::weather::TransitionPhase::Done => NIMBUS_TRANSITION_DONE,

@@ -182,6 +182,11 @@ pub const NIMBUS_TRANSITION_RUNNING: u32 = 2;
 /// `NimbusWeatherState.phase`: the transition has finished (or was instant, or the sky is
 /// held after nimbus_context_cancel_weather).
 pub const NIMBUS_TRANSITION_DONE: u32 = 3;
+/// `NimbusWeatherState.phase`: the requested weather's map is still being generated, a slice
+/// per frame; the transition starts once it is ready, at the later of its requested start
+/// and that frame's time. `from_name` is the sky now, `to_name` the request, `start` its
+/// requested start. Since ABI 0.7 (a context made with an older header reads SCHEDULED).
+pub const NIMBUS_TRANSITION_PENDING: u32 = 4;
 
 /// Largest preset (file or text) accepted, in bytes.
 pub const NIMBUS_MAX_PRESET_BYTES: usize = 65536;

@@ -1,6 +1,8 @@
-//! The weather maps on the GPU: three RGBA8 textures rotating through the roles "from", "to"
-//! and spare. A new weather is generated into a free texture; an interrupted transition is
-//! frozen by blending "from" and "to" into the spare, which becomes the new "from".
+//! The weather maps on the GPU: four RGBA8 textures rotating through the roles "from", "to"
+//! and two free ones. A new weather is generated into a free texture, at once or a slice of
+//! rows per frame (`Generation`, so that a request costs no single frame a hitch), while the
+//! running transition keeps its two; an interrupted transition is frozen by blending "from"
+//! and "to" into the other free texture, which becomes the new "from".
 
 use bytemuck::{Pod, Zeroable};
 
@@ -12,7 +14,9 @@ use crate::weather::{MapAction, Weather};
 struct BakeParams {
     seed: u32,
     size: u32,
-    _pad: [u32; 2],
+    /// The first row this dispatch writes (a slice of a generation over frames).
+    row_offset: u32,
+    _pad: u32,
     frequency: [u32; 4],
     amount: [f32; 4],
 }
@@ -25,9 +29,33 @@ struct BlendParams {
     _pad: [u32; 2],
 }
 
+/// Textures in the rotation: from, to, the one a generation writes, the one a blend writes.
+const SLOTS: usize = 4;
+
+/// A weather map being generated over frames: one dispatch per slice of rows, each with its
+/// parameters and bind group made up front (nothing is created in the frames it runs in).
+pub(crate) struct Generation {
+    /// The texture it writes (free while it runs: neither from nor to).
+    pub slot: usize,
+    slices: Vec<(wgpu::BindGroup, [u32; 3])>,
+    next: usize,
+}
+
+impl Generation {
+    /// Whether every slice has been recorded.
+    pub fn done(&self) -> bool {
+        self.next == self.slices.len()
+    }
+
+    /// The share of the map recorded so far, in [0, 1].
+    pub fn progress(&self) -> f32 {
+        self.next as f32 / self.slices.len().max(1) as f32
+    }
+}
+
 pub(crate) struct WeatherMaps {
-    textures: [wgpu::Texture; 3],
-    views: [wgpu::TextureView; 3],
+    textures: [wgpu::Texture; SLOTS],
+    views: [wgpu::TextureView; SLOTS],
     from: usize,
     to: usize,
     bake: wgpu::ComputePipeline,
@@ -69,8 +97,8 @@ impl WeatherMaps {
         blend: wgpu::ComputePipeline,
     ) -> Self {
         let textures =
-            [0, 1, 2].map(|i| map_texture(device, &format!("nimbus weather map {i}"), size));
-        let views = [0, 1, 2].map(|i| textures[i].create_view(&Default::default()));
+            std::array::from_fn(|i| map_texture(device, &format!("nimbus weather map {i}"), size));
+        let views = std::array::from_fn(|i: usize| textures[i].create_view(&Default::default()));
         Self {
             textures,
             views,
@@ -87,6 +115,24 @@ impl WeatherMaps {
         [g, g, 1]
     }
 
+    /// The bake parameters of `w`'s map for the rows from `row_offset` on.
+    fn bake_params(&self, w: &Weather, row_offset: u32) -> BakeParams {
+        let mut frequency = [1u32; 4];
+        let mut amount = [0.0f32; 4];
+        for (i, l) in w.map.layers.iter().take(3).enumerate() {
+            frequency[i] = l.frequency;
+            amount[i] = l.amount;
+        }
+        BakeParams {
+            seed: w.map.seed,
+            size: self.size,
+            row_offset,
+            _pad: 0,
+            frequency,
+            amount,
+        }
+    }
+
     fn generate(
         &self,
         device: &wgpu::Device,
@@ -94,27 +140,117 @@ impl WeatherMaps {
         slot: usize,
         w: &Weather,
     ) {
-        let mut frequency = [1u32; 4];
-        let mut amount = [0.0f32; 4];
-        for (i, l) in w.map.layers.iter().take(3).enumerate() {
-            frequency[i] = l.frequency;
-            amount[i] = l.amount;
-        }
-        let params = BakeParams {
-            seed: w.map.seed,
-            size: self.size,
-            _pad: [0; 2],
-            frequency,
-            amount,
-        };
         dispatch(
             device,
             encoder,
             &self.bake,
-            Some(bytemuck::bytes_of(&params)),
+            Some(bytemuck::bytes_of(&self.bake_params(w, 0))),
             &[(1, &self.views[slot])],
             self.groups(),
         );
+    }
+
+    /// The two textures that are neither from nor to.
+    fn free_slots(&self) -> [usize; 2] {
+        let mut free = (0..SLOTS).filter(|&i| i != self.from && i != self.to);
+        let first = free
+            .next()
+            .unwrap_or_else(|| unreachable!("four slots, two in use"));
+        let second = free
+            .next()
+            .unwrap_or_else(|| unreachable!("four slots, two in use"));
+        [first, second]
+    }
+
+    /// Whether a map of this set's size takes more than one slice of `texels_per_frame`
+    /// (0 = no limit): then a request generates it with [`WeatherMaps::begin_generation`].
+    pub fn needs_slices(&self, texels_per_frame: u32) -> bool {
+        texels_per_frame != 0 && (self.size as u64).pow(2) > texels_per_frame as u64
+    }
+
+    /// Prepares the generation of `w`'s map into a free texture in slices of about
+    /// `texels_per_frame` texels (whole rows, a multiple of the 8-row workgroup), recorded
+    /// one per [`WeatherMaps::record_slice`]. Makes every slice's parameters and bind group
+    /// now. The textures in use are not touched.
+    pub fn begin_generation(
+        &self,
+        device: &wgpu::Device,
+        w: &Weather,
+        texels_per_frame: u32,
+    ) -> Generation {
+        use wgpu::util::DeviceExt;
+        let slot = self.free_slots()[0];
+        let rows = (texels_per_frame / self.size.max(1)).max(8) / 8 * 8;
+        let layout = self.bake.get_bind_group_layout(0);
+        let mut slices = Vec::new();
+        let mut row = 0;
+        while row < self.size {
+            let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("nimbus weather slice params"),
+                contents: bytemuck::bytes_of(&self.bake_params(w, row)),
+                usage: wgpu::BufferUsages::UNIFORM,
+            });
+            let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("nimbus weather slice"),
+                layout: &layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: params.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(&self.views[slot]),
+                    },
+                ],
+            });
+            let count = rows.min(self.size - row);
+            slices.push((bind, [self.size.div_ceil(8), count.div_ceil(8), 1]));
+            row += count;
+        }
+        Generation {
+            slot,
+            slices,
+            next: 0,
+        }
+    }
+
+    /// Records the next slice of `generation` (nothing once it is done).
+    pub fn record_slice(&self, encoder: &mut wgpu::CommandEncoder, generation: &mut Generation) {
+        let Some((bind, groups)) = generation.slices.get(generation.next) else {
+            return;
+        };
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("nimbus weather slice"),
+            timestamp_writes: None,
+        });
+        pass.set_pipeline(&self.bake);
+        pass.set_bind_group(0, bind, &[]);
+        pass.dispatch_workgroups(groups[0], groups[1], groups[2]);
+        generation.next += 1;
+    }
+
+    /// Records what the timeline decided for a request whose map `generation` has finished
+    /// (recorded, in this encoder or an earlier submission), and returns the new (from, to)
+    /// slots for `commit`: the generated map is the new "to".
+    pub fn settle_generated(
+        &self,
+        device: &wgpu::Device,
+        encoder: &mut wgpu::CommandEncoder,
+        action: MapAction,
+        generation: &Generation,
+    ) -> (usize, usize) {
+        let from = match action {
+            MapAction::KeepFrom => self.from,
+            MapAction::ToBecomesFrom => self.to,
+            MapAction::Bake(weight) => {
+                let spare = self.free_slots()[1];
+                debug_assert_ne!(spare, generation.slot);
+                self.record_blend(device, encoder, weight, spare);
+                spare
+            }
+        };
+        (from, generation.slot)
     }
 
     /// Both maps become `weather`'s (an instant change). Generated once and copied: the
@@ -149,7 +285,7 @@ impl WeatherMaps {
         action: MapAction,
         target: &Weather,
     ) -> (usize, usize) {
-        let spare = 3 - self.from - self.to;
+        let spare = self.free_slots()[0];
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("nimbus weather transition"),
         });
@@ -177,7 +313,7 @@ impl WeatherMaps {
         queue: &wgpu::Queue,
         action: MapAction,
     ) -> (usize, usize) {
-        let spare = 3 - self.from - self.to;
+        let spare = self.free_slots()[0];
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("nimbus weather hold"),
         });

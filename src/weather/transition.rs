@@ -62,7 +62,7 @@ pub struct TransitionState {
     pub duration: f64,
     /// Blend weight in [0, 1] (smoothstep of the elapsed fraction).
     pub progress: f32,
-    /// Scheduled (not begun), running, or done.
+    /// Scheduled (not begun), running, done, or pending (its map being generated).
     pub phase: TransitionPhase,
 }
 
@@ -75,6 +75,11 @@ pub enum TransitionPhase {
     Running,
     /// It has finished (or was instant): the sky holds its target.
     Done,
+    /// Requested, its weather map still being generated over frames (`Renderer::set_weather`
+    /// with a map larger than `Settings::weather_map_texels_per_frame`): it enters the
+    /// timeline once the map is ready, at the later of its requested start and that frame's
+    /// time. Never returned by a `Timeline` itself.
+    Pending,
 }
 
 /// The transition state machine.

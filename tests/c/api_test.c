@@ -938,6 +938,22 @@ static void test_weather_and_resize(void) {
         st.next = &unknown;
         EXPECT_ON(ctx, nimbus_context_weather_state(ctx, 25.0, &st), NIMBUS_ERROR_UNKNOWN_STRUCT);
         st.next = NULL;
+        /* Since ABI 0.7: the default 512² map is generated over 8 frames; until it is ready a
+         * request is PENDING (the first of those waiting: stormy at 5 s, then overcast at 8 s
+         * and mine at 20 s), then it enters at max(its start, the frame's time). */
+        EXPECT_ON(ctx, nimbus_context_weather_state(ctx, 25.0, &st), NIMBUS_OK);
+        TRUE(strncmp(st.to_name, "stormy", 6) == 0 && st.phase == NIMBUS_TRANSITION_PENDING);
+        TRUE(st.progress == 0.0f && st.start == 5.0 && st.duration == 10.0);
+        {
+            int frames = 0;
+            while (st.phase == NIMBUS_TRANSITION_PENDING && frames < 40) {
+                EXPECT_ON(ctx, render_ok(), NIMBUS_OK);
+                EXPECT_ON(ctx, nimbus_context_weather_state(ctx, 25.0, &st), NIMBUS_OK);
+                frames++;
+            }
+            printf("the three requested weathers' maps took %d frames\n", frames);
+            TRUE(frames == 24);
+        }
         EXPECT_ON(ctx, nimbus_context_weather_state(ctx, 25.0, &st), NIMBUS_OK);
         TRUE(strcmp(st.to_name, "mine") == 0 && st.phase == NIMBUS_TRANSITION_RUNNING);
         TRUE(st.progress > 0.0f && st.progress < 1.0f && st.start == 20.0 && st.duration == 10.0);
@@ -1093,6 +1109,15 @@ static void test_old_header_and_device_loss(void) {
     color = make_texture_on(c, W, H, NIMBUS_FORMAT_RGBA16_FLOAT);
     out = make_texture_on(c, W, H, NIMBUS_FORMAT_RGBA16_FLOAT);
     EXPECT_ON(c, render_on(c, color, out, 0.0), NIMBUS_OK);
+    /* A 0.1 header knows no NIMBUS_TRANSITION_PENDING: a request whose map is still being
+     * made reads as scheduled. */
+    {
+        NimbusWeatherState st;
+        memset(&st, 0, sizeof st);
+        EXPECT_ON(c, nimbus_context_set_weather(c, NIMBUS_PRESET_STORMY, 0, 5.0, 1.0), NIMBUS_OK);
+        EXPECT_ON(c, nimbus_context_weather_state(c, 6.0, &st), NIMBUS_OK);
+        TRUE(st.phase == NIMBUS_TRANSITION_SCHEDULED && strcmp(st.to_name, "stormy") == 0);
+    }
 
     /* The device goes away: every call says so; destroy works; a new context works. */
     EXPECT_ON(c, nimbus_test_hook_lose_device(c), NIMBUS_OK);
