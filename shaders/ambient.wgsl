@@ -17,9 +17,21 @@
 // w = cos θ / Σ_k N_k p_k(ω), and E ≈ π Σ L_i w_i / Σ w_i, V ≈ Σ T_i w_i / Σ w_i (normalised by
 // Σ w, which is π up to the quadrature's error, so that a clear sky gives V = 1 exactly).
 
+// The rays are marched in AMBIENT_SUBSETS interleaved subsets (ray i in subset i mod 3), one
+// subset per frame (all of them on a view's first frame and after its history is dropped:
+// a camera cut, a resize, a settings change), one ray per invocation; each subset keeps its
+// sums, and `ambient_resolve` adds the latest of all of them. So a frame costs a third of the
+// rays, the estimate is the whole set's, and each part of it is at most two frames old.
+
 // Per hemisphere (0 above, 1 below): rgb E_clouds (the sun's units × sr), a V.
 @group(0) @binding(13) var<storage, read_write> ambient_out: array<vec4f, 2>;
+// Per subset and hemisphere (index 2 × subset + hemisphere): the weighted sums of (L, T), and
+// (the sum of the weights, 0, 0, 0).
+@group(0) @binding(14) var<storage, read_write> ambient_partial: array<vec4f, 12>;
+// x: the first subset this frame marches, y: how many (1, or all 3).
+@group(0) @binding(15) var<storage, read> ambient_params: vec4u;
 
+const AMBIENT_SUBSETS: u32 = 3u;
 const AMBIENT_THREADS: u32 = 64u;
 const AMBIENT_COSINE_RAYS: u32 = 128u;
 const AMBIENT_SUN_RAYS: u32 = 64u;
@@ -67,6 +79,7 @@ fn sun_lobes() -> SunLobes {
     return SunLobes(u.phase.xy, vec2f(first, n - first));
 }
 
+// One workgroup per hemisphere (x) and subset marched this frame (y).
 @compute @workgroup_size(64, 1, 1)
 fn ambient(@builtin(local_invocation_id) lid: vec3u, @builtin(workgroup_id) wg: vec3u) {
     let cam = u.camera.xyz;
@@ -81,42 +94,41 @@ fn ambient(@builtin(local_invocation_id) lid: vec3u, @builtin(workgroup_id) wg: 
     // noise footprint (as the light march takes a quarter of its segment): the rays sample the
     // clouds' detail rather than a blur of it, whose transmittance would be too low.
     let pixel_angle = 0.25 * sqrt(2.0 * PI / n_c);
+    let subset = (ambient_params.x + wg.y) % AMBIENT_SUBSETS;
+    // (AMBIENT_COSINE_RAYS + AMBIENT_SUN_RAYS) / AMBIENT_SUBSETS = 64 rays: one each.
+    let i = subset + AMBIENT_SUBSETS * lid.x;
+    var dir: vec3f;
+    if (i < AMBIENT_COSINE_RAYS) {
+        let k = f32(i);
+        dir = around(normal, normal_frame, sqrt((k + 0.5) / n_c), k * GOLDEN_ANGLE);
+    } else {
+        var k = f32(i - AMBIENT_COSINE_RAYS);
+        var lobe = 0u;
+        if (k >= lobes.count.x) {
+            k -= lobes.count.x;
+            lobe = 1u;
+        }
+        let xi = (k + 0.5) / lobes.count[lobe];
+        dir = around(sun, sun_frame, hg_cosine(xi, lobes.g[lobe]), k * GOLDEN_ANGLE);
+    }
     var sum = vec4f(0.0);
-    var weights = 0.0;
-    for (var i = lid.x; i < AMBIENT_COSINE_RAYS + AMBIENT_SUN_RAYS; i += AMBIENT_THREADS) {
-        var dir: vec3f;
-        if (i < AMBIENT_COSINE_RAYS) {
-            let k = f32(i);
-            dir = around(normal, normal_frame, sqrt((k + 0.5) / n_c), k * GOLDEN_ANGLE);
-        } else {
-            var k = f32(i - AMBIENT_COSINE_RAYS);
-            var lobe = 0u;
-            if (k >= lobes.count.x) {
-                k -= lobes.count.x;
-                lobe = 1u;
-            }
-            let xi = (k + 0.5) / lobes.count[lobe];
-            dir = around(sun, sun_frame, hg_cosine(xi, lobes.g[lobe]), k * GOLDEN_ANGLE);
-        }
-        let cos_n = dot(dir, normal);
-        if (cos_n <= 0.0) {
-            // A sun-lobe ray outside this hemisphere: weight 0.
-            continue;
-        }
+    var weight = 0.0;
+    let cos_n = dot(dir, normal);
+    // A sun-lobe ray outside this hemisphere weighs 0.
+    if (cos_n > 0.0) {
         let c = dot(dir, sun);
         let density = n_c * cos_n / PI
             + lobes.count.x * henyey_greenstein(c, lobes.g.x)
             + lobes.count.y * henyey_greenstein(c, lobes.g.y);
-        let weight = cos_n / density;
+        weight = cos_n / density;
         light_samples = 0u;
-        // A fixed low-discrepancy offset per ray (no temporal accumulation here).
+        // A fixed low-discrepancy offset per ray (the directions are fixed too).
         let jitter = fract(0.5 + f32(i) * 0.61803398875);
         let ray = march_ray(cam, dir, u.layer.w, jitter, pixel_angle);
-        sum += weight * vec4f(ray.radiance, ray.transmittance);
-        weights += weight;
+        sum = weight * vec4f(ray.radiance, ray.transmittance);
     }
     partial[lid.x] = sum;
-    partial_weight[lid.x] = weights;
+    partial_weight[lid.x] = weight;
     workgroupBarrier();
     for (var stride = AMBIENT_THREADS / 2u; stride > 0u; stride >>= 1u) {
         if (lid.x < stride) {
@@ -126,7 +138,22 @@ fn ambient(@builtin(local_invocation_id) lid: vec3u, @builtin(workgroup_id) wg: 
         workgroupBarrier();
     }
     if (lid.x == 0u) {
-        let total = partial[0] / partial_weight[0];
-        ambient_out[wg.x] = vec4f(total.rgb * PI, total.a);
+        let slot = 2u * (2u * subset + wg.x);
+        ambient_partial[slot] = partial[0];
+        ambient_partial[slot + 1u] = vec4f(partial_weight[0], 0.0, 0.0, 0.0);
     }
+}
+
+// The estimate from every subset's latest sums, per hemisphere (invocation = hemisphere).
+@compute @workgroup_size(2, 1, 1)
+fn ambient_resolve(@builtin(local_invocation_id) lid: vec3u) {
+    var sum = vec4f(0.0);
+    var weight = 0.0;
+    for (var subset = 0u; subset < AMBIENT_SUBSETS; subset++) {
+        let slot = 2u * (2u * subset + lid.x);
+        sum += ambient_partial[slot];
+        weight += ambient_partial[slot + 1u].x;
+    }
+    let total = sum / weight;
+    ambient_out[lid.x] = vec4f(total.rgb * PI, total.a);
 }

@@ -2,9 +2,10 @@
 //! docs/frame-outputs.md): what a host needs to light its own objects under, inside or above
 //! the clouds with what the clouds do to the sky.
 //!
-//! Each frame the ambient probe (shaders/ambient.wgsl) marches 128 cosine-weighted rays per
-//! hemisphere around the local vertical with the march's own ray function. For each hemisphere
-//! it gives the clouds' irradiance E_clouds = ∫ L_clouds(ω) cos θ dω (what they scatter toward
+//! The ambient probe (shaders/ambient.wgsl) marches, per hemisphere around the local vertical,
+//! 128 cosine-weighted rays and 64 around the sun (the phase function's lobes) with the march's
+//! own ray function, a third of them per frame (all of them when the view has no history).
+//! For each hemisphere it gives the clouds' irradiance E_clouds = ∫ L_clouds(ω) cos θ dω (what they scatter toward
 //! the camera, haze included, in the sun's units) and the sky visibility
 //! V = 1/π ∫ T(ω) cos θ dω, the cosine-weighted transmittance through them: the share of the
 //! host's own light from that hemisphere (its sky above, its ground below) that still arrives.

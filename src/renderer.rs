@@ -917,6 +917,12 @@ impl Renderer {
                 Some(p) => (&p.view, &p.sampling),
                 None => (&self.no_shadow.view, &self.no_shadow.sampling),
             };
+            // The whole probe where the view has no history (first frame, camera cut, resize,
+            // settings change), else a third of it in turn.
+            let no_history = state.history.view_proj.is_none();
+            state
+                .ambient
+                .write_params(&self.queue, state.frame_index, no_history);
             self.passes.ambient.record(
                 &device,
                 encoder,
@@ -925,6 +931,11 @@ impl Renderer {
                 self.weather_maps.views(),
                 shadow,
                 &state.ambient,
+                if no_history {
+                    crate::gpu::ambient::AMBIENT_SUBSETS
+                } else {
+                    1
+                },
                 self.timer.as_ref(),
             );
             let (march, resolve) = self.passes.for_depth(checked.depth_kind);
@@ -1133,7 +1144,7 @@ impl Renderer {
             clouds: &clouds.view,
             depth: &depth.view,
             shadows: self.cloud_shadows(),
-            ambient: &self.views.get(view)?.ambient,
+            ambient: &self.views.get(view)?.ambient.out,
         })
     }
 
@@ -1151,7 +1162,7 @@ impl Renderer {
             ));
         }
         let mut encoder = self.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(&state.ambient, 0, &state.ambient_readback, 0, None);
+        encoder.copy_buffer_to_buffer(&state.ambient.out, 0, &state.ambient_readback, 0, None);
         self.queue.submit([encoder.finish()]);
         let bytes = crate::gpu::readback::map_read(&self.device, &state.ambient_readback)?;
         Ok(crate::AmbientLight::from_bytes(&bytes))

@@ -96,8 +96,8 @@ pub(crate) struct ViewState {
     pub uniforms: wgpu::Buffer,
     pub temporal_uniforms: wgpu::Buffer,
     pub composite_uniforms: wgpu::Buffer,
-    /// The ambient probe's output (src/gpu/ambient.rs), and where a read copies it.
-    pub ambient: wgpu::Buffer,
+    /// The ambient probe's buffers (src/gpu/ambient.rs), and where a read copies its output.
+    pub ambient: crate::gpu::ambient::AmbientBuffers,
     pub ambient_readback: wgpu::Buffer,
     pub sized: Option<SizedTextures>,
     pub pending: Option<Pending>,
@@ -126,12 +126,7 @@ impl ViewState {
                 device,
                 "nimbus composite uniforms",
             ),
-            ambient: device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some("nimbus ambient light"),
-                size: crate::gpu::ambient::AMBIENT_BYTES,
-                usage: crate::gpu::ambient::AMBIENT_USAGE,
-                mapped_at_creation: false,
-            }),
+            ambient: crate::gpu::ambient::AmbientBuffers::new(device),
             ambient_readback: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("nimbus ambient light readback"),
                 size: crate::gpu::ambient::AMBIENT_BYTES,
@@ -200,7 +195,7 @@ impl ViewState {
     /// Bytes of GPU memory this view holds (trace-grid textures and uniforms).
     pub(crate) fn memory_bytes(&self, texture_bytes: impl Fn(&wgpu::Texture) -> u64) -> u64 {
         let mut total: u64 = self.buffers().iter().map(|b| b.size()).sum::<u64>()
-            + self.ambient.size()
+            + self.ambient.bytes()
             + self.ambient_readback.size();
         if let Some(s) = &self.sized {
             for image in std::iter::once(&s.fresh).chain(&s.history) {

@@ -43,17 +43,30 @@ fn frame_at(eye: Vec3, dir: Vec3, up: Vec3, fov_deg: f32, aspect: f32, sun: Sun)
     }
 }
 
-fn ambient_at(h: &mut Headless, eye: Vec3, sun: Sun) -> AmbientLight {
-    let f = frame_at(
-        eye,
-        Vec3::new(0.0, 0.3, -1.0),
-        Vec3::Y,
-        60.0,
-        16.0 / 9.0,
-        sun,
-    );
-    h.render(&f).unwrap();
+/// The probe marches a third of its rays per frame once a view has history: three frames
+/// of the same inputs update all of it.
+const SUBSETS: usize = 3;
+
+fn ambient_at_time(h: &mut Headless, eye: Vec3, sun: Sun, time: f64) -> AmbientLight {
+    let f = FrameInputs {
+        time,
+        ..frame_at(
+            eye,
+            Vec3::new(0.0, 0.3, -1.0),
+            Vec3::Y,
+            60.0,
+            16.0 / 9.0,
+            sun,
+        )
+    };
+    for _ in 0..SUBSETS {
+        h.render(&f).unwrap();
+    }
     h.renderer().read_ambient_light(ViewId::DEFAULT).unwrap()
+}
+
+fn ambient_at(h: &mut Headless, eye: Vec3, sun: Sun) -> AmbientLight {
+    ambient_at_time(h, eye, sun, 0.0)
 }
 
 /// 2 E₃(τ) = 2 ∫₀¹ μ e^{−τ/μ} dμ: the cosine-weighted transmittance of a flat slab.
@@ -353,22 +366,7 @@ fn the_answer_is_deterministic_and_follows_the_sun_and_the_weather() {
         .unwrap();
     let mut last = 0.0;
     for t in [5.0, 20.0] {
-        let f = FrameInputs {
-            time: t,
-            ..frame_at(
-                eye,
-                Vec3::new(0.0, 0.3, -1.0),
-                Vec3::Y,
-                60.0,
-                16.0 / 9.0,
-                Sun::default(),
-            )
-        };
-        h.render(&f).unwrap();
-        let v = h
-            .renderer()
-            .read_ambient_light(ViewId::DEFAULT)
-            .unwrap()
+        let v = ambient_at_time(&mut h, eye, Sun::default(), t)
             .above
             .sky_visibility;
         println!("transition to clear, t = {t} s: V {v:.4}");
@@ -424,4 +422,39 @@ fn in_the_noise_model_the_probe_matches_the_picture() {
             light.sky_visibility
         );
     }
+}
+
+#[test]
+fn a_third_of_the_rays_per_frame_adds_up_to_the_whole_probe() {
+    // Temporal on: after the first frame one subset of rays a frame. Three frames with a new
+    // sun give exactly what the whole probe gives at once (a view without history).
+    let mut h = headless(small_noise(3));
+    let eye = Vec3::new(0.0, 2.0, 0.0);
+    let first = ambient_at(&mut h, eye, Sun::default());
+    let low_sun = Sun {
+        direction: Vec3::new(0.9, 0.1, 0.0).normalize(),
+        ..Sun::default()
+    };
+    let f = frame_at(
+        eye,
+        Vec3::new(0.0, 0.3, -1.0),
+        Vec3::Y,
+        60.0,
+        16.0 / 9.0,
+        low_sun,
+    );
+    let mut seen = Vec::new();
+    for _ in 0..SUBSETS {
+        h.render(&f).unwrap();
+        seen.push(h.renderer().read_ambient_light(ViewId::DEFAULT).unwrap());
+    }
+    // Each frame moved it (a third of the rays had the new sun), none alone got there...
+    assert_ne!(seen[0], first);
+    assert_ne!(seen[0], seen[1]);
+    assert_ne!(seen[1], seen[2]);
+    // ...and the third equals the whole probe, made at once on a view with no history.
+    h.renderer_mut().reset_history();
+    h.render(&f).unwrap();
+    let whole = h.renderer().read_ambient_light(ViewId::DEFAULT).unwrap();
+    assert_eq!(seen[2], whole);
 }

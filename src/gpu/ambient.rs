@@ -1,14 +1,15 @@
 //! The ambient probe: per view and frame, the clouds' irradiance at the camera from the
 //! hemisphere above and below, and how much of each hemisphere's light comes from behind the
-//! clouds (shaders/ambient.wgsl). Two workgroups of 64 invocations, 128 march rays each, after
-//! the view's march uniforms are written; the result stays on the GPU in the view's
-//! [`AMBIENT_BYTES`]-byte buffer until read.
+//! clouds (shaders/ambient.wgsl). 192 march rays per hemisphere in three interleaved subsets,
+//! one subset a frame (all three when the view has no history), one ray per invocation; a
+//! resolve adds every subset's latest sums into the view's [`AMBIENT_BYTES`]-byte buffer,
+//! which stays on the GPU until read.
 
 use super::bind_cache::BindCache;
 use super::compute::frame_pipeline;
 use super::march::{medium_entries, medium_layout_entries, medium_views, shadow_layout_entries};
 use super::noise::NoiseTextures;
-use super::shaders::DepthKind;
+use super::shaders::{pass_source, DepthKind};
 
 /// Size of a view's ambient buffer: two `vec4<f32>` (above, below), each rgb the clouds'
 /// irradiance and a the sky visibility.
@@ -18,9 +19,72 @@ pub(crate) const AMBIENT_BYTES: u64 = 32;
 pub(crate) const AMBIENT_USAGE: wgpu::BufferUsages =
     wgpu::BufferUsages::STORAGE.union(wgpu::BufferUsages::COPY_SRC);
 
+/// The interleaved ray subsets (shaders/ambient.wgsl `AMBIENT_SUBSETS`).
+pub(crate) const AMBIENT_SUBSETS: u32 = 3;
+
+/// Size of a view's per-subset sums: per subset and hemisphere two `vec4<f32>`.
+pub(crate) const AMBIENT_PARTIAL_BYTES: u64 = AMBIENT_SUBSETS as u64 * 2 * 2 * 16;
+
+/// A view's ambient probe buffers: the output, the per-subset sums, the frame's parameters.
+pub(crate) struct AmbientBuffers {
+    pub out: wgpu::Buffer,
+    pub partial: wgpu::Buffer,
+    pub params: wgpu::Buffer,
+}
+
+impl AmbientBuffers {
+    pub(crate) fn new(device: &wgpu::Device) -> Self {
+        let buffer = |label, size, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        use wgpu::BufferUsages as U;
+        Self {
+            out: buffer("nimbus ambient light", AMBIENT_BYTES, AMBIENT_USAGE),
+            partial: buffer("nimbus ambient sums", AMBIENT_PARTIAL_BYTES, U::STORAGE),
+            params: buffer("nimbus ambient params", 16, U::STORAGE | U::COPY_DST),
+        }
+    }
+
+    /// Bytes held.
+    pub(crate) fn bytes(&self) -> u64 {
+        self.out.size() + self.partial.size() + self.params.size()
+    }
+
+    /// Which subsets this frame marches: all on a view's first frame and whenever it has no
+    /// history (`fresh`), else one, in turn by `frame_index`.
+    pub(crate) fn write_params(&self, queue: &wgpu::Queue, frame_index: u32, fresh: bool) {
+        let (first, count) = if fresh {
+            (0, AMBIENT_SUBSETS)
+        } else {
+            (frame_index % AMBIENT_SUBSETS, 1)
+        };
+        queue.write_buffer(&self.params, 0, bytemuck::cast_slice(&[first, count, 0, 0]));
+    }
+}
+
+fn storage(binding: u32, read_only: bool, size: u64) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: wgpu::BufferSize::new(size),
+        },
+        count: None,
+    }
+}
+
 pub(crate) struct AmbientPipeline {
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
+    /// `ambient_resolve`: the subsets' sums into the output (same layout).
+    resolve: wgpu::ComputePipeline,
     /// Bind groups by the views they bind, per view (its uniform buffer; the ambient buffer
     /// belongs to the same view).
     pub binds: BindCache,
@@ -37,27 +101,41 @@ impl AmbientPipeline {
             &[
                 medium_layout_entries().as_slice(),
                 &shadow_layout_entries(),
-                &[wgpu::BindGroupLayoutEntry {
-                    binding: 13,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Storage { read_only: false },
-                        has_dynamic_offset: false,
-                        min_binding_size: wgpu::BufferSize::new(AMBIENT_BYTES),
-                    },
-                    count: None,
-                }],
+                &[
+                    storage(13, false, AMBIENT_BYTES),
+                    storage(14, false, AMBIENT_PARTIAL_BYTES),
+                    storage(15, true, 16),
+                ],
             ]
             .concat(),
         );
+        let resolve = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("nimbus ambient resolve"),
+            layout: Some(
+                &device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                    label: Some("nimbus ambient resolve"),
+                    bind_group_layouts: &[Some(&layout)],
+                    immediate_size: 0,
+                }),
+            ),
+            module: &device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("nimbus ambient resolve"),
+                source: wgpu::ShaderSource::Wgsl(pass_source("ambient", DepthKind::Depth).into()),
+            }),
+            entry_point: Some("ambient_resolve"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
         Self {
             layout,
             pipeline,
+            resolve,
             binds: BindCache::default(),
         }
     }
 
-    /// Records the probe for the view whose march uniforms are `uniforms`, into `out`.
+    /// Records the probe for the view whose march uniforms are `uniforms` into its buffers
+    /// (their parameters written for this frame: `AmbientBuffers::write_params`).
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn record(
         &mut self,
@@ -67,7 +145,8 @@ impl AmbientPipeline {
         noise: &NoiseTextures,
         weather: (&wgpu::TextureView, &wgpu::TextureView),
         shadow: (&wgpu::TextureView, &wgpu::Buffer),
-        out: &wgpu::Buffer,
+        out: &AmbientBuffers,
+        subsets: u32,
         timer: Option<&super::timing::GpuTimer>,
     ) {
         let mut views = medium_views(noise, weather).to_vec();
@@ -86,7 +165,15 @@ impl AmbientPipeline {
                 },
                 wgpu::BindGroupEntry {
                     binding: 13,
-                    resource: out.as_entire_binding(),
+                    resource: out.out.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 14,
+                    resource: out.partial.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 15,
+                    resource: out.params.as_entire_binding(),
                 },
             ]);
             device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -95,20 +182,37 @@ impl AmbientPipeline {
                 entries: &entries,
             })
         });
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("nimbus ambient probe"),
+                timestamp_writes: timer.map(|t| {
+                    let (begin, _) = t.writes(super::timing::Pass::Ambient);
+                    wgpu::ComputePassTimestampWrites {
+                        query_set: &t.query_set,
+                        beginning_of_pass_write_index: begin,
+                        end_of_pass_write_index: None,
+                    }
+                }),
+            });
+            pass.set_pipeline(&self.pipeline);
+            pass.set_bind_group(0, &bind, &[]);
+            // One workgroup per hemisphere and subset marched.
+            pass.dispatch_workgroups(2, subsets, 1);
+        }
+        // A pass of its own: the sums are written above and read here.
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("nimbus ambient probe"),
+            label: Some("nimbus ambient resolve"),
             timestamp_writes: timer.map(|t| {
-                let (begin, end) = t.writes(super::timing::Pass::Ambient);
+                let (_, end) = t.writes(super::timing::Pass::Ambient);
                 wgpu::ComputePassTimestampWrites {
                     query_set: &t.query_set,
-                    beginning_of_pass_write_index: begin,
+                    beginning_of_pass_write_index: None,
                     end_of_pass_write_index: end,
                 }
             }),
         });
-        pass.set_pipeline(&self.pipeline);
+        pass.set_pipeline(&self.resolve);
         pass.set_bind_group(0, &bind, &[]);
-        // One workgroup per hemisphere.
-        pass.dispatch_workgroups(2, 1, 1);
+        pass.dispatch_workgroups(1, 1, 1);
     }
 }
