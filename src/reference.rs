@@ -75,16 +75,7 @@ impl PathTracer {
         }
         let (device, _, _, _) = renderer.medium();
         gpu_scope(device, || {
-            let storage = |binding, read_only, size: u64| wgpu::BindGroupLayoutEntry {
-                binding,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Storage { read_only },
-                    has_dynamic_offset: false,
-                    min_binding_size: wgpu::BufferSize::new(size),
-                },
-                count: None,
-            };
+            let storage = crate::gpu::compute::storage_buffer_entry;
             let (layout, pipeline) = frame_pipeline(
                 device,
                 "nimbus path trace",

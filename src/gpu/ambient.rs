@@ -6,7 +6,7 @@
 //! which stays on the GPU until read.
 
 use super::bind_cache::BindCache;
-use super::compute::frame_pipeline;
+use super::compute::{frame_pipeline, storage_buffer_entry};
 use super::march::{medium_entries, medium_layout_entries, medium_views, shadow_layout_entries};
 use super::noise::NoiseTextures;
 use super::shaders::{pass_source, DepthKind};
@@ -67,19 +67,6 @@ impl AmbientBuffers {
     }
 }
 
-fn storage(binding: u32, read_only: bool, size: u64) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: wgpu::BufferSize::new(size),
-        },
-        count: None,
-    }
-}
-
 pub(crate) struct AmbientPipeline {
     layout: wgpu::BindGroupLayout,
     pipeline: wgpu::ComputePipeline,
@@ -102,9 +89,9 @@ impl AmbientPipeline {
                 medium_layout_entries().as_slice(),
                 &shadow_layout_entries(),
                 &[
-                    storage(13, false, AMBIENT_BYTES),
-                    storage(14, false, AMBIENT_PARTIAL_BYTES),
-                    storage(15, true, 16),
+                    storage_buffer_entry(13, false, AMBIENT_BYTES),
+                    storage_buffer_entry(14, false, AMBIENT_PARTIAL_BYTES),
+                    storage_buffer_entry(15, true, 16),
                 ],
             ]
             .concat(),

@@ -113,6 +113,24 @@ pub(crate) fn storage_entry(
     }
 }
 
+/// A compute-stage storage-buffer layout entry of at least `min_size` bytes (0: any size).
+pub(crate) fn storage_buffer_entry(
+    binding: u32,
+    read_only: bool,
+    min_size: u64,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: wgpu::BufferSize::new(min_size),
+        },
+        count: None,
+    }
+}
+
 /// A compute-stage layout entry for a `T` of per-frame parameters, bound as a read-only
 /// storage buffer rather than a uniform buffer: see [`FRAME_PARAMS_USAGE`].
 pub(crate) fn params_entry<T>(binding: u32) -> wgpu::BindGroupLayoutEntry {

@@ -3,24 +3,11 @@
 
 use wgpu::util::DeviceExt;
 
-use super::compute::frame_pipeline;
+use super::compute::{frame_pipeline, storage_buffer_entry};
 use super::march::{medium_entries, medium_layout_entries, MarchUniforms};
 use super::noise::NoiseTextures;
 use super::shaders::DepthKind;
 use crate::error::Result;
-
-fn buffer_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
-}
 
 /// The density at each point (unitless, as `sample_density` returns it at mip 0).
 pub(crate) fn probe_density(
@@ -42,7 +29,10 @@ pub(crate) fn probe_density(
         "probe",
         &[
             medium_layout_entries().as_slice(),
-            &[buffer_entry(6, true), buffer_entry(7, false)],
+            &[
+                storage_buffer_entry(6, true, 0),
+                storage_buffer_entry(7, false, 0),
+            ],
         ]
         .concat(),
     );
