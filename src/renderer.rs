@@ -597,7 +597,8 @@ impl Renderer {
     }
 
     /// Starts a transition to `weather`, beginning at host time `start` (seconds, the clock of
-    /// [`FrameInputs::time`]) and lasting `duration` seconds (0 = at once). If a transition is
+    /// [`FrameInputs::time`]) and lasting `duration` seconds (0 = at once: the views' accumulated
+    /// history, which shows the old weather, is dropped when it enters). If a transition is
     /// running, its current blend is baked into a texture and becomes the starting point, so
     /// the sky never jumps. Requests must come in time order. On error nothing changes.
     ///
@@ -657,10 +658,12 @@ impl Renderer {
         self.timeline = timeline;
         self.query_data = None;
         if duration == 0.0 {
-            // An instant change: the map must not show the old weather for a few frames.
+            // An instant change: neither the shadow map nor the views' accumulated history may
+            // show the old weather for a few frames.
             if let Some(pass) = &mut self.shadow {
                 pass.plan.invalidate();
             }
+            self.reset_history();
         }
     }
 

@@ -480,3 +480,40 @@ fn pending_requests_queue_in_order_skip_stale_ones_cancel_and_survive_settings()
     }
     assert_eq!(h.renderer().weather_at(30.0).weather.name, "cloudy");
 }
+
+#[test]
+fn an_instant_change_drops_the_history_of_the_old_weather() {
+    // Temporal reprojection on: 8 frames of sparse history, then an instant change to
+    // overcast enters (its map made over those frames). Its first frame must be a frame with
+    // no history, as a renderer that always had overcast gives after a history reset, not
+    // overcast traced pixels among reprojected sparse ones.
+    let mut changed = headless(sliced(small_noise(1)));
+    changed
+        .renderer_mut()
+        .set_weather(Weather::overcast(), 0.0, 0.0)
+        .unwrap();
+    let mut always = headless(Settings {
+        weather: Weather::overcast(),
+        ..sliced(small_noise(1))
+    });
+    for i in 0..7 {
+        render(&mut changed, 0, 0.1 * i as f64);
+        render(&mut always, 0, 0.1 * i as f64);
+    }
+    always.renderer_mut().reset_history();
+    let got = render(&mut changed, 0, 0.7);
+    let want = render(&mut always, 0, 0.7);
+    assert_eq!(changed.renderer().weather_state(0.7).to, "overcast");
+    let mean = got
+        .iter()
+        .zip(&want)
+        .map(|(p, q)| (p[0] - q[0]).abs())
+        .sum::<f32>()
+        / got.len() as f32;
+    let level = want.iter().map(|p| p[0]).sum::<f32>() / want.len() as f32;
+    println!("entry frame against a reset overcast history: mean change {mean} on {level}");
+    assert!(
+        mean < 0.002 * level,
+        "mean change {mean} on a mean of {level}"
+    );
+}
