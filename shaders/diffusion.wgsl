@@ -6,9 +6,26 @@ const DE_MAX_ALBEDO: f32 = 0.999999;
 // The least sun cosine a column is lit at (about 17°; see march.wgsl).
 const DE_MIN_MU0: f32 = 0.3;
 
+// j0,1, the first zero of J0: a cylinder of radius a has the transverse buckling j0,1 / a.
+const BESSEL_J0_FIRST_ZERO: f32 = 2.4048256;
+
 // (I0, I1) per unit sun irradiance at optical depth a below the top of a column of optical depth
-// a + b, sun at cosine mu0, single-scattering albedo w, phase asymmetry g.
-fn delta_eddington(a: f32, b: f32, mu0: f32, albedo: f32, g: f32) -> vec2f {
+// a + b, sun at cosine mu0, single-scattering albedo w, phase asymmetry g, in a column whose
+// cross-section has the optical radius tau_across (its sides leak diffuse light: the transverse
+// buckling, see src/lighting/diffusion.rs; 1e30 for a layer).
+fn delta_eddington(a: f32, b: f32, mu0: f32, albedo: f32, g: f32, tau_across: f32) -> vec2f {
+    let leaky = delta_eddington_moments(a, b, mu0, albedo, g, tau_across);
+    if (tau_across >= 1e30) {
+        return leaky;
+    }
+    // Matched to the broad medium's field at the sunlit face (delta_eddington_column in
+    // src/lighting/diffusion.rs says why).
+    let face_leaky = delta_eddington_moments(0.0, a + b, mu0, albedo, g, tau_across).x;
+    let face_broad = delta_eddington_moments(0.0, a + b, mu0, albedo, g, 1e30).x;
+    return leaky * select(1.0, face_broad / face_leaky, face_leaky > 0.0);
+}
+
+fn delta_eddington_moments(a: f32, b: f32, mu0: f32, albedo: f32, g: f32, tau_across: f32) -> vec2f {
     // The forward peak folded into the beam: f = g² for a forward phase, none for a backward one.
     let f = max(g, 0.0) * max(g, 0.0);
     let w = clamp(albedo, 0.0, DE_MAX_ALBEDO);
@@ -17,8 +34,12 @@ fn delta_eddington(a: f32, b: f32, mu0: f32, albedo: f32, g: f32) -> vec2f {
     let gs = (g - f) / (1.0 - f);
     let ta = a * scale;
     let tt = (a + b) * scale;
-    let k = sqrt(3.0 * (1.0 - ws) * (1.0 - ws * gs));
-    let p = k / (1.0 - ws * gs);
+    let d = 1.0 - ws * gs;
+    let a_ext = tau_across * scale + 2.0 / (3.0 * d);
+    let buckling = BESSEL_J0_FIRST_ZERO / a_ext;
+    let absorb3 = 3.0 * (1.0 - ws) + buckling * buckling / d;
+    let k = sqrt(absorb3 * d);
+    let p = k / d;
     // The particular solution is singular at k mu0 = 1: step mu0 off it.
     var m0 = max(mu0, 1e-3);
     if (abs(1.0 - k * k * m0 * m0) < 1e-3) {
@@ -27,7 +48,7 @@ fn delta_eddington(a: f32, b: f32, mu0: f32, albedo: f32, g: f32) -> vec2f {
     let den = 1.0 - k * k * m0 * m0;
     let s = 3.0 * ws / (4.0 * PI);
     let alpha = -m0 * m0 * s * (1.0 + gs * (1.0 - ws)) / den;
-    let beta = m0 * (3.0 * (1.0 - ws) * alpha - s);
+    let beta = m0 * (absorb3 * alpha - s);
     let e_bottom = exp(-tt / m0);
     let e_k = exp(-k * tt);
     let ca = 1.0 + 2.0 * p / 3.0;
@@ -43,19 +64,44 @@ fn delta_eddington(a: f32, b: f32, mu0: f32, albedo: f32, g: f32) -> vec2f {
     return vec2f(c1 * ea + c2 * eb + alpha * ed, p * (c1 * ea - c2 * eb) + beta * ed);
 }
 
+// The phase that sends the delta scaling's forward-peak light toward the camera: light scattered
+// n times into the peak has been spread n times by the peak's own width (an HG lobe of
+// asymmetry `spread`, PhaseModel::peak_spread), so the phase is seen with its asymmetries scaled
+// by spreadⁿ, averaged over n's Poisson law (n = 1, 2, and n ≥ 3 at its mean). peak_phase in
+// src/lighting/diffusion.rs derives it. `model`, `params`: as phase_eval's.
+fn peak_phase(model: u32, params: vec4f, cos_theta: f32, tau_sun: f32, albedo: f32, g: f32, spread: f32) -> f32 {
+    let gc = clamp(g, 0.0, 1.0);
+    let m = clamp(albedo, 0.0, DE_MAX_ALBEDO) * gc * gc * max(tau_sun, 0.0);
+    var p = vec3f(1.0 - 0.5 * m, 0.5 * m, 0.0);
+    var n3 = 3.0;
+    if (m >= 1e-3) {
+        let at_least_one = 1.0 - exp(-m);
+        p.x = m * exp(-m) / at_least_one;
+        p.y = 0.5 * m * p.x;
+        p.z = max(1.0 - p.x - p.y, 0.0);
+        if (p.z > 1e-6) {
+            n3 = max((m / at_least_one - p.x - 2.0 * p.y) / p.z, 3.0);
+        }
+    }
+    return p.x * phase_eval(model, params, cos_theta, spread)
+        + p.y * phase_eval(model, params, cos_theta, spread * spread)
+        + p.z * phase_eval(model, params, cos_theta, pow(spread, n3));
+}
+
 // The multiple-scattering part of the source per unit sun irradiance (see
 // delta_eddington_source in src/lighting/diffusion.rs for why each term): the forward-scattered
-// light the delta scaling keeps in the beam, p (e^{-(1-wg²)tau} - e^{-tau}); the diffuse field
+// light the delta scaling keeps in the beam, p (e^{-(1-wg²)tau} - e^{-tau}) with the phase p
+// spread by peak_phase (phase_peak); the diffuse field
 // seen through the phase, I0 + g mu I1 in a thick column (mu: the light's direction toward the
 // camera against the downward vertical), the same energy in an HG lobe of asymmetry g g'
 // around the sun in a thin one, blended by 1 - e^{-tau*'}.
-fn delta_eddington_source(tau_sun: f32, tau_below: f32, mu0: f32, mu_view: f32, cos_theta: f32, albedo: f32, g: f32, phase: f32) -> f32 {
+fn delta_eddington_source(tau_sun: f32, tau_above: f32, tau_below: f32, mu0: f32, mu_view: f32, cos_theta: f32, albedo: f32, g: f32, phase_peak: f32, tau_across: f32) -> f32 {
     let w = clamp(albedo, 0.0, DE_MAX_ALBEDO);
     let m0 = max(mu0, 1e-3);
-    let a = tau_sun * m0;
-    let i = delta_eddington(a, tau_below, m0, w, g);
+    let a = tau_above;
+    let i = delta_eddington(a, tau_below, m0, w, g, tau_across);
     let f = max(g, 0.0) * max(g, 0.0);
-    let peak = phase * (exp(-(1.0 - w * f) * tau_sun) - exp(-tau_sun));
+    let peak = phase_peak * (exp(-(1.0 - w * f) * tau_sun) - exp(-tau_sun));
     let p1 = i.x + g * mu_view * i.y;
     let ge = g * (g - f) / (1.0 - f);
     let lobe = 4.0 * PI * i.x * henyey_greenstein(cos_theta, ge);

@@ -124,15 +124,11 @@ fn sun_optical_depth(p: vec3f, n: u32, footprint: f32) -> f32 {
     return tau * u.shape.z + tau_map;
 }
 
-// Optical depth straight down from p (density sigma_t there) to the bottom of the medium,
-// for the independent-column diffuse model: exact for the debug slab and sphere; for the noise
-// model the column below is taken as dense as the sample, down to the layer's base.
-fn column_below(p: vec3f, local_up: vec3f, sigma_t: f32, body_density: f32) -> f32 {
+// Optical depth straight down from p (density sigma_t there) to the bottom of a layer, for
+// the independent-column diffuse model: exact for the debug slab; for the noise model the
+// column below is taken as dense as the sample, down to the layer's base.
+fn column_below(p: vec3f, sigma_t: f32, body_density: f32) -> f32 {
     let mode = debug_mode();
-    if (mode == DEBUG_SPHERE) {
-        let s = ball_segment(p, -local_up, u.debug_sphere.xyz, u.debug_sphere.w, 1e9);
-        return select(0.0, s.a.y, s.count > 0u) * sigma_t;
-    }
     if (mode == DEBUG_SLAB) {
         return max(altitude(p, u.planet.xyz, u.planet.w) - u.debug.x, 0.0) * sigma_t;
     }
@@ -140,6 +136,73 @@ fn column_below(p: vec3f, local_up: vec3f, sigma_t: f32, body_density: f32) -> f
     // which the detail erosion thins only at the edges).
     let body = max(sigma_t, body_density * u.shape.z);
     return max(altitude(p, u.planet.xyz, u.planet.w) - u.layer.x, 0.0) * body;
+}
+
+// Optical distance (m) from p inside the debug sphere to its surface along d.
+fn sphere_exit(p: vec3f, d: vec3f) -> f32 {
+    let s = ball_segment(p, d, u.debug_sphere.xyz, u.debug_sphere.w, 1e9);
+    return select(0.0, s.a.y, s.count > 0u);
+}
+
+// The delta-Eddington multiple-scattering source of a sample (per unit sun irradiance, the
+// march's `ms`): the diffuse field of the independent column through it. `tau_sun` is the light
+// march's optical depth, `tau_view` the view ray's since it entered the cloud.
+//
+// The column runs along the direction in which the medium's boundary is nearest, since diffuse
+// light leaves a cloud mostly through its nearest side:
+// - In a layer (the debug slab, the noise model) that is the local vertical. Its top is tau_sun
+//   mu0 above (the light march's optical depth projected: the slab's exact top), its bottom the
+//   column below or, seen from below, where the view ray came in. A sun near or below the local
+//   horizon still lights a bounded cloud through its sides: the column is lit at no less than
+//   DE_MIN_MU0. Layers are taken as infinitely wide (a noise cloud's own width is not known to
+//   the march).
+// - In the debug sphere it is the radius, with both ends on the surface (exact). The sun lights
+//   it from the end that faces it; within DE_MIN_MU0 of the terminator the two ends share the
+//   light, so the terminator has no seam (the system is linear in the incident flux). The lit
+//   end is no farther than the light march's own path to the surface, which also reaches a lit
+//   point. The column's cross-section is the great circle every radius crosses, and its sides
+//   leak (the transverse buckling in src/lighting/diffusion.rs). A vertical column through a
+//   sphere keeps light that leaks out of its sides (1.55x the path tracer back-lit) and lights a
+//   side-lit sphere only through DE_MIN_MU0 (0.36x).
+fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, sigma_t: f32, body_density: f32, tau_view: f32, cos_theta: f32) -> f32 {
+    let albedo = u.shape.w;
+    let g = u.ms_model.y;
+    let phase = peak_phase(u32(u.misc.y), u.phase, cos_theta, tau_sun, albedo, g, u.ms_model.z);
+    if (debug_mode() == DEBUG_SPHERE) {
+        let offset = p - u.debug_sphere.xyz;
+        let r = length(offset);
+        // At the centre every radius is as short: the one toward the sun.
+        let radial = select(u.sun.xyz, offset / max(r, 1e-6), r > 1e-3 * u.debug_sphere.w);
+        let outward = sphere_exit(p, radial) * sigma_t;
+        let inward = sphere_exit(p, -radial) * sigma_t;
+        let across = u.debug_sphere.w * sigma_t;
+        let c = dot(u.sun.xyz, radial);
+        let mu_view = dot(dir, radial);
+        let w_out = clamp(0.5 + 0.5 * c / DE_MIN_MU0, 0.0, 1.0);
+        var light = 0.0;
+        if (w_out > 0.0) {
+            light += w_out * delta_eddington_source(tau_sun, min(outward, tau_sun), inward, max(c, DE_MIN_MU0), mu_view, cos_theta, albedo, g, phase, across);
+        }
+        if (w_out < 1.0) {
+            light += (1.0 - w_out) * delta_eddington_source(tau_sun, min(inward, tau_sun), outward, max(-c, DE_MIN_MU0), -mu_view, cos_theta, albedo, g, phase, across);
+        }
+        return light;
+    }
+    let local_up = normalize(p + u.planet.xyz * u.planet.w);
+    let mu0 = max(dot(u.sun.xyz, local_up), DE_MIN_MU0);
+    let mu_view = dot(dir, local_up);
+    let column = column_below(p, sigma_t, body_density);
+    // Looking up, the view ray's own optical depth since it entered the cloud, projected on the
+    // vertical, is the column below as the ray measured it. Blended in over the first 15° above
+    // the horizon (no seam at the horizon).
+    let seen = min(column, tau_view * max(mu_view, 0.0));
+    var below = mix(column, seen, smoothstep(0.0, 0.25, mu_view));
+    // Looking toward the sun, the camera sees the cloud's dark side: light escapes there through
+    // the boundary the view ray came in by, however the cloud is shaped, so that boundary is no
+    // farther than the ray's own optical depth (for a slab, never closer than the column: no
+    // change).
+    below = mix(below, min(below, tau_view), smoothstep(0.0, 0.5, cos_theta));
+    return delta_eddington_source(tau_sun, tau_sun * mu0, below, mu0, mu_view, cos_theta, albedo, g, phase, 1e30);
 }
 
 // One view ray from `cam` along `dir` up to `max_t` (m): the in-scattered radiance, the
@@ -264,26 +327,7 @@ fn march_ray(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32) 
             }
             let sample_tau_view = tau_view + 0.5 * sigma_t * dt;
             if (delta_eddington_on) {
-                // The independent column through the sample (the local vertical): its top is
-                // tau * mu0 above (the light march's optical depth, projected), its bottom
-                // either the column below or, seen from below, where the view ray came in.
-                // A sun near or below the local horizon still lights a bounded cloud through
-                // its sides: the column is lit at no less than DE_MIN_MU0.
-                let local_up = normalize(p + up * radius);
-                let mu0 = max(dot(u.sun.xyz, local_up), DE_MIN_MU0);
-                let mu_view = dot(dir, local_up);
-                let column = column_below(p, local_up, sigma_t, body_density);
-                // Looking up, the view ray's own optical depth since it entered the cloud,
-                // projected on the vertical, is the column below as the ray measured it. Blended
-                // in over the first 15° above the horizon (no seam at the horizon).
-                let seen = min(column, sample_tau_view * max(mu_view, 0.0));
-                var below = mix(column, seen, smoothstep(0.0, 0.25, mu_view));
-                // Looking toward the sun, the camera sees the cloud's dark side: light escapes
-                // there through the boundary the view ray came in by, however the cloud is
-                // shaped, so that boundary is no farther than the ray's own optical depth
-                // (for a slab, never closer than the column: no change).
-                below = mix(below, min(below, sample_tau_view), smoothstep(0.0, 0.5, cos_theta));
-                ms += delta_eddington_source(tau, below, mu0, mu_view, cos_theta, u.shape.w, u.ms_model.y, phase_oct[0]);
+                ms += column_light(p, dir, tau, sigma_t, body_density, sample_tau_view, cos_theta);
             }
             let hf = clamp((altitude(p, up, radius) - u.layer.x) / thickness, 0.0, 1.0);
             let ambient = mix(u.ambient_bottom.rgb, u.ambient_top.rgb, hf);

@@ -32,7 +32,7 @@ struct MarchUniforms {
     pattern: vec4f,         // this frame's offset in the block (x, y), visit index, unused
     opts: vec4f,            // coarse-then-fine, distance-grown steps, noise LOD, light LOD (0/1)
     viewport: vec4f,        // the rectangle of the scene targets rendered: x, y, width, height (px)
-    ms_model: vec4f,        // multiple scattering: 0 single, 1 octaves, 2 delta-Eddington; y: phase g
+    ms_model: vec4f,        // multiple scattering: 0 single, 1 octaves, 2 delta-Eddington; y: phase g; z: peak spread
     shadow_light: vec4f,    // light from the cloud shadow map (0/1), local distance (m), local steps, unused
 }
 

@@ -222,7 +222,9 @@ impl MarchUniforms {
                 // |g| < 0.98 keeps the delta scaling's 1 - g² away from 0 (a dual-lobe HG may
                 // reach 0.999; no cloud phase comes near).
                 s.lighting.phase.asymmetry().clamp(-0.98, 0.98),
-                0.0,
+                // How one scattering into the delta-Eddington peak spreads light (diffusion.wgsl's
+                // peak_phase).
+                s.lighting.phase.peak_spread(),
                 0.0,
             ],
             shadow_light: [

@@ -112,6 +112,51 @@ impl PhaseModel {
         }
     }
 
+    /// The phase's second Legendre moment χ₂ = ⟨P₂(cos θ)⟩ = (3⟨cos²θ⟩ - 1) / 2. HG's is g²;
+    /// Draine 2003's, from HG's ⟨cos²θ⟩ = (1 + 2g²)/3 and ⟨cos⁴θ⟩ = (7 + 20g² + 8g⁴)/35 (its
+    /// Legendre moments gˡ), is ⟨cos²θ⟩ = (⟨cos²⟩ + α⟨cos⁴⟩) / (1 + α⟨cos²⟩).
+    pub fn second_moment(&self) -> f32 {
+        let hg = |g: f32| g * g;
+        let draine = |g: f32, a: f32| {
+            let c2 = (1.0 + 2.0 * g * g) / 3.0;
+            let c4 = (7.0 + 20.0 * g * g + 8.0 * g.powi(4)) / 35.0;
+            let cos2 = (c2 + a * c4) / (1.0 + a * c2);
+            (3.0 * cos2 - 1.0) / 2.0
+        };
+        match *self {
+            PhaseModel::JendersieDEon {
+                droplet_diameter_um,
+            } => {
+                let p = jendersie_deon_params(droplet_diameter_um);
+                (1.0 - p.w_d) * hg(p.g_hg) + p.w_d * draine(p.g_d, p.alpha)
+            }
+            PhaseModel::DualLobeHg {
+                g_forward,
+                g_backward,
+                forward_weight,
+            } => forward_weight * hg(g_forward) + (1.0 - forward_weight) * hg(g_backward),
+        }
+    }
+
+    /// How much one scattering into the delta-Eddington forward peak spreads light: the
+    /// asymmetry s of the Henyey-Greenstein lobe with the peak's own second moment.
+    ///
+    /// Delta-Eddington splits the phase into a peak of weight f = g² and a rest of asymmetry
+    /// g' = (g - f) / (1 - f). The peak's first moment is then exactly 1 (a delta, for the
+    /// fluxes), but its second is (χ₂ - (1 - f) g'²) / f < 1: it has a width. An HG lobe with
+    /// that second moment has s = √((χ₂ - (1 - f) g'²) / f). HG(0.8): s = 0.943; the default
+    /// Jendersie-d'Eon phase: about 0.96. 1 (no spread) where the phase has no forward peak.
+    pub fn peak_spread(&self) -> f32 {
+        let g = self.asymmetry().clamp(0.0, 0.98);
+        let f = g * g;
+        if f <= 1e-6 {
+            return 1.0;
+        }
+        let g_rest = (g - f) / (1.0 - f);
+        let peak_moment = (self.second_moment() - (1.0 - f) * g_rest * g_rest) / f;
+        peak_moment.clamp(0.0, 1.0).sqrt()
+    }
+
     /// The asymmetry parameter g = ⟨cos θ⟩ (the phase's first Legendre moment), which is what
     /// a P1 (Eddington) diffuse field sees of the phase. HG's is its g; Draine 2003's is
     /// g (1 + α (3 + 2g²) / 5) / (1 + α (1 + 2g²) / 3).
@@ -338,5 +383,69 @@ mod tests {
                 "{model:?}: quadrature {mean}, formula {g}"
             );
         }
+    }
+
+    #[test]
+    fn second_moment_is_the_mean_legendre_p2() {
+        for model in [
+            PhaseModel::default(),
+            PhaseModel::JendersieDEon {
+                droplet_diameter_um: 30.0,
+            },
+            PhaseModel::DualLobeHg {
+                g_forward: 0.8,
+                g_backward: -0.3,
+                forward_weight: 0.7,
+            },
+        ] {
+            // ∫ p(μ) P2(μ) 2π dμ, the same quadrature as for the mean cosine.
+            let eps = 1e-7f64;
+            let (u0, u1) = ((2.0 + eps).ln(), eps.ln());
+            let n = 400_000;
+            let mut chi2 = 0.0f64;
+            for i in 0..n {
+                let u = u0 + (u1 - u0) * (i as f64 + 0.5) / n as f64;
+                let mu = 1.0 + eps - u.exp();
+                let dmu = u.exp() * (u0 - u1) / n as f64;
+                let p2 = 0.5 * (3.0 * mu * mu - 1.0);
+                chi2 += model.eval(mu as f32, 1.0) as f64 * p2 * 2.0 * std::f64::consts::PI * dmu;
+            }
+            let formula = model.second_moment() as f64;
+            assert!(
+                (chi2 - formula).abs() < 2e-3,
+                "{model:?}: quadrature {chi2}, formula {formula}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_delta_eddington_peak_has_the_width_its_second_moment_says() {
+        // HG(g): χ₂ = g², f = g², g' = g / (1 + g): the peak's second moment is 2g / (1 + g).
+        let hg = PhaseModel::DualLobeHg {
+            g_forward: 0.8,
+            g_backward: 0.0,
+            forward_weight: 1.0,
+        };
+        let expected = (2.0f32 * 0.8 / 1.8).sqrt();
+        assert!(
+            (hg.peak_spread() - expected).abs() < 1e-5,
+            "{}",
+            hg.peak_spread()
+        );
+        // The default phase's peak is narrower than its mean cosine but not a delta.
+        let s = PhaseModel::default().peak_spread();
+        let g = PhaseModel::default().asymmetry();
+        assert!(s > g && s < 1.0, "spread {s}, g {g}");
+        // An isotropic phase has no peak to spread by.
+        let iso = PhaseModel::DualLobeHg {
+            g_forward: 0.0,
+            g_backward: 0.0,
+            forward_weight: 1.0,
+        };
+        assert_eq!(iso.peak_spread(), 1.0);
+        println!(
+            "default phase: g {g}, chi2 {}, spread {s}",
+            PhaseModel::default().second_moment()
+        );
     }
 }
