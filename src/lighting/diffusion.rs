@@ -353,21 +353,9 @@ mod tests {
         ] {
             let mut previous_peak = f32::INFINITY;
             for tau_sun in [0.0f32, 0.5, 2.0, 8.0, 30.0] {
-                // Normalised over the sphere: it only redistributes the peak light.
-                let n = 20_000;
-                let mut total = 0.0f64;
-                for i in 0..n {
-                    // Midpoint rule in u = ln(1 + ε - μ), crowding points into the peak.
-                    let eps = 1e-7f64;
-                    let (u0, u1) = ((2.0 + eps).ln(), eps.ln());
-                    let u = u0 + (u1 - u0) * (i as f64 + 0.5) / n as f64;
-                    let mu = 1.0 + eps - u.exp();
-                    let dmu = u.exp() * (u0 - u1) / n as f64;
-                    total += peak_phase(&phase, mu as f32, tau_sun, 0.999) as f64
-                        * 2.0
-                        * std::f64::consts::PI
-                        * dmu;
-                }
+                let total = crate::lighting::phase::over_the_sphere(20_000, |mu| {
+                    peak_phase(&phase, mu as f32, tau_sun, 0.999) as f64
+                });
                 // It only redistributes the peak light (a mixture of normalised phases).
                 assert!(
                     (total - 1.0).abs() < 5e-3,

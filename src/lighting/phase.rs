@@ -238,6 +238,22 @@ impl PhaseModel {
     }
 }
 
+/// ∫ f(μ) 2π dμ over the sphere (f of the cosine with the forward direction), by the midpoint
+/// rule on `n` points in u = ln(1 + ε - μ), which crowds them into a forward peak.
+#[cfg(test)]
+pub(crate) fn over_the_sphere(n: usize, f: impl Fn(f64) -> f64) -> f64 {
+    let eps = 1e-7f64;
+    let (u0, u1) = ((2.0 + eps).ln(), eps.ln());
+    let mut sum = 0.0f64;
+    for i in 0..n {
+        let u = u0 + (u1 - u0) * (i as f64 + 0.5) / n as f64;
+        let mu = 1.0 + eps - u.exp();
+        let dmu = u.exp() * (u0 - u1) / n as f64;
+        sum += f(mu) * 2.0 * std::f64::consts::PI * dmu;
+    }
+    sum
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -352,9 +368,9 @@ mod tests {
         .is_err());
     }
 
-    #[test]
-    fn asymmetry_is_the_mean_cosine() {
-        for model in [
+    /// The test models: the default, a larger droplet, a dual-lobe HG with a back lobe.
+    fn models() -> [PhaseModel; 3] {
+        [
             PhaseModel::default(),
             PhaseModel::JendersieDEon {
                 droplet_diameter_um: 30.0,
@@ -364,19 +380,13 @@ mod tests {
                 g_backward: -0.3,
                 forward_weight: 0.7,
             },
-        ] {
-            // ∫ p(μ) μ 2π dμ by the midpoint rule in u = ln(1 + ε - μ), which crowds the
-            // points into the forward peak.
-            let eps = 1e-7f64;
-            let (u0, u1) = ((2.0 + eps).ln(), eps.ln());
-            let n = 400_000;
-            let mut mean = 0.0f64;
-            for i in 0..n {
-                let u = u0 + (u1 - u0) * (i as f64 + 0.5) / n as f64;
-                let mu = 1.0 + eps - u.exp();
-                let dmu = u.exp() * (u0 - u1) / n as f64;
-                mean += model.eval(mu as f32, 1.0) as f64 * mu * 2.0 * std::f64::consts::PI * dmu;
-            }
+        ]
+    }
+
+    #[test]
+    fn asymmetry_is_the_mean_cosine() {
+        for model in models() {
+            let mean = over_the_sphere(400_000, |mu| model.eval(mu as f32, 1.0) as f64 * mu);
             let g = model.asymmetry() as f64;
             assert!(
                 (mean - g).abs() < 2e-3,
@@ -387,29 +397,10 @@ mod tests {
 
     #[test]
     fn second_moment_is_the_mean_legendre_p2() {
-        for model in [
-            PhaseModel::default(),
-            PhaseModel::JendersieDEon {
-                droplet_diameter_um: 30.0,
-            },
-            PhaseModel::DualLobeHg {
-                g_forward: 0.8,
-                g_backward: -0.3,
-                forward_weight: 0.7,
-            },
-        ] {
-            // ∫ p(μ) P2(μ) 2π dμ, the same quadrature as for the mean cosine.
-            let eps = 1e-7f64;
-            let (u0, u1) = ((2.0 + eps).ln(), eps.ln());
-            let n = 400_000;
-            let mut chi2 = 0.0f64;
-            for i in 0..n {
-                let u = u0 + (u1 - u0) * (i as f64 + 0.5) / n as f64;
-                let mu = 1.0 + eps - u.exp();
-                let dmu = u.exp() * (u0 - u1) / n as f64;
-                let p2 = 0.5 * (3.0 * mu * mu - 1.0);
-                chi2 += model.eval(mu as f32, 1.0) as f64 * p2 * 2.0 * std::f64::consts::PI * dmu;
-            }
+        for model in models() {
+            let chi2 = over_the_sphere(400_000, |mu| {
+                model.eval(mu as f32, 1.0) as f64 * 0.5 * (3.0 * mu * mu - 1.0)
+            });
             let formula = model.second_moment() as f64;
             assert!(
                 (chi2 - formula).abs() < 2e-3,
