@@ -780,11 +780,7 @@ fn a_sphere_is_lit_from_its_sun_side_and_its_rim_is_not_a_spike() {
         "side-lit contrast {contrast:.2}, worst step {worst_step:.3}, back-lit rim / middle {:.2}",
         top / middle
     );
-    assert!(
-        top / middle < 9.0,
-        "back-lit rim / middle {}",
-        top / middle
-    );
+    assert!(top / middle < 9.0, "back-lit rim / middle {}", top / middle);
     assert!(top > middle, "the rim toward the sun is the bright side");
 }
 
