@@ -40,7 +40,7 @@ pub const MAX_ALBEDO: f32 = 1.0 - 1e-6;
 
 /// j₀,₁, the first zero of the Bessel function J₀: the transverse buckling of a cylinder of
 /// radius a is j₀,₁ / a.
-pub const BESSEL_J0_FIRST_ZERO: f32 = 2.404_825_6;
+pub(crate) const BESSEL_J0_FIRST_ZERO: f32 = 2.404_825_6;
 
 /// The diffuse field's moments (I0, I1) per unit sun irradiance at optical depth `a` below the
 /// top of a slab of optical depth `a + b` (both unscaled, as the march measures them), for a
