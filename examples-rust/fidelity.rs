@@ -586,6 +586,11 @@ fn main() -> Result<(), String> {
         s.haze.fade_distance = f32::INFINITY;
         s.weather.high_layer.coverage = 0.0;
         quality.apply(&mut s);
+        // The medium the path tracer sees: mip 0 everywhere. At these small images a pixel's
+        // footprint is 20 times a 1280x720 frame's, and the noise LOD's coarse mips would show
+        // the march a thinner medium (its mean on fair cumulus 1.08 / 1.06 with them, 1.19 /
+        // 1.34 without, 2026-12-03): that is the image size's doing, not the model's.
+        s.march.noise_lod = false;
         let size = (W * 2, H * 2);
         let f = view.frame(size.0, size.1, 0.0);
         let png = picture(format!("{preset:?}_{where_}.png").to_lowercase());
@@ -670,13 +675,15 @@ fn main() -> Result<(), String> {
              column cannot carry, from the lit hemisphere into the terminator region (side-lit, the\n\
              middle of the disc too dark and the far limb too bright), and the rim of a back-lit\n\
              sphere, 1° from the sun, where the forward peak's exact width decides the brightness.\n\
-             The noise-model views are judged on the layer column. Their FLIP is not the\n\
-             reconstruction's: the unoptimised march (`--quality ultra`, every pixel every frame,\n\
-             no LOD, no early exit) scores as far from the reference (0.254 / 0.223 / 0.253 at\n\
-             256 samples on 2026-12-03), and its means are brighter on the fair-cumulus views\n\
-             (1.20 from the ground, 1.38 from above, against the default level's 1.08 and 1.06),\n\
-             so part of the default level's agreement there is its approximations cancelling\n\
-             the model's excess (the floor column is the reference's own noise).\n\n\
+             The noise-model views are judged on the layer column, with the march's noise LOD\n\
+             off: at 64×36 a pixel's footprint is 20 times a 1280×720 frame's, and the coarse mips\n\
+             showed the march a thinner medium than the path tracer's mip 0 (the fair-cumulus means\n\
+             came out 1.08 and 1.06 with them, on 2026-12-03). What remains on broken cumulus, from\n\
+             above most, is the layer column's excess: its bottom is taken as dense as the cloud's\n\
+             body down to the layer's base, which a broken field is not. Their FLIP is not the\n\
+             reconstruction's either: the unoptimised march (`--quality ultra`, every pixel every\n\
+             frame, no early exit) scored 0.254 / 0.223 / 0.253 at 256 samples, as far as the\n\
+             default level (the floor column is the reference's own noise).\n\n\
              The path tracer is unbiased (tests/reference.rs checks it against closed forms and\n\
              energy conservation), but with the Jendersie-d'Eon phase its estimates are noisy at\n\
              these sample counts: the phase's forward peak (g = 0.988, about 1100 / sr) makes rare\n\
