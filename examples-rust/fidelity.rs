@@ -283,11 +283,15 @@ fn flip(reference: &[[f32; 4]], test: &[[f32; 4]], size: (u32, u32), exposure: f
     nv_flip::FlipPool::from_image(&error).mean()
 }
 
-/// Writes march | path traced side by side, at the exposure that maps the reference's mean
-/// luminance to 0.18.
-fn side_by_side(path: &Path, march: &[[f32; 4]], traced: &[[f32; 4]], size: (u32, u32)) -> f32 {
+/// The exposure that maps the reference's mean luminance to 0.18.
+fn reference_exposure(traced: &[[f32; 4]]) -> f32 {
     let mean = traced.iter().map(luminance).sum::<f64>() / traced.len() as f64;
-    let exposure = (0.18 / mean.max(1e-12)) as f32;
+    (0.18 / mean.max(1e-12)) as f32
+}
+
+/// Writes march | path traced side by side, at the reference's exposure.
+fn side_by_side(path: &Path, march: &[[f32; 4]], traced: &[[f32; 4]], size: (u32, u32)) {
+    let exposure = reference_exposure(traced);
     // Each pixel as a 4 x 4 block, so the small images can be looked at.
     const SCALE: usize = 4;
     let (w, h) = (size.0 as usize, size.1 as usize);
@@ -303,7 +307,6 @@ fn side_by_side(path: &Path, march: &[[f32; 4]], traced: &[[f32; 4]], size: (u32
     if let Err(e) = write_png(path, &out, ow, oh, exposure) {
         eprintln!("{e}");
     }
-    exposure
 }
 
 /// One view's row: the ratio over the pixels `keep` selects, the reference's noise, FLIP,
@@ -323,10 +326,11 @@ fn compare(
     let (traced, noise) = merge(&v.a, &v.b);
     let r = ratio(&v.march, &traced, &keep);
     let r_octaves = ratio(&v.octaves, &traced, &keep);
-    let exposure = match png {
-        Some(path) => side_by_side(&path, &v.march, &traced, size),
-        None => 1.0,
-    };
+    // FLIP at the exposure the pictures are shown at, whether or not they are written.
+    let exposure = reference_exposure(&traced);
+    if let Some(path) = png {
+        side_by_side(&path, &v.march, &traced, size);
+    }
     let flip_mean = flip(&traced, &v.march, size, exposure);
     let flip_floor = flip(&v.a, &v.b, size, exposure);
     if std::env::args().any(|a| a == "--bands") {
@@ -677,13 +681,14 @@ fn main() -> Result<(), String> {
              sphere, 1° from the sun, where the forward peak's exact width decides the brightness.\n\
              The noise-model views are judged on the layer column, with the march's noise LOD\n\
              off: at 64×36 a pixel's footprint is 20 times a 1280×720 frame's, and the coarse mips\n\
-             showed the march a thinner medium than the path tracer's mip 0 (the fair-cumulus means\n\
-             came out 1.08 and 1.06 with them, on 2026-12-03). What remains on broken cumulus, from\n\
-             above most, is the layer column's excess: its bottom is taken as dense as the cloud's\n\
-             body down to the layer's base, which a broken field is not. Their FLIP is not the\n\
-             reconstruction's either: the unoptimised march (`--quality ultra`, every pixel every\n\
-             frame, no early exit) scored 0.254 / 0.223 / 0.253 at 256 samples, as far as the\n\
-             default level (the floor column is the reference's own noise).\n\n\
+             showed the march a thinner medium than the path tracer's mip 0. The column below a\n\
+             sample is taken as dense as the sample (it was as dense as the cloud's body before\n\
+             erosion, chosen against references the LOD had distorted: 1.19 from the ground and\n\
+             1.34 from above on fair cumulus, against the table's values now). Their FLIP is not\n\
+             the reconstruction's: the unoptimised march (`--quality ultra`, every pixel every\n\
+             frame, no early exit) scored as far from the reference as the default level (0.254 /\n\
+             0.223 / 0.253 at 256 samples, with the older column); the floor column is the\n\
+             reference's own noise.\n\n\
              The path tracer is unbiased (tests/reference.rs checks it against closed forms and\n\
              energy conservation), but with the Jendersie-d'Eon phase its estimates are noisy at\n\
              these sample counts: the phase's forward peak (g = 0.988, about 1100 / sr) makes rare\n\
