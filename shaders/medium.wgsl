@@ -89,11 +89,6 @@ fn weather_at(horizontal: vec2f) -> vec4f {
     return mix(a, textureSampleLevel(weather_to, noise_sampler, uv, 0.0), w);
 }
 
-// The base-shape density (before detail erosion) of the last full sample_density call that
-// reached the noise: the march's column model reads it as the density of the cloud's body
-// around the sample, which the erosion at the cloud's edge does not thin.
-var<private> last_base_density: f32;
-
 // Unitless density at p (σt = density × extinction); `cheap` skips the detail erosion.
 // `footprint` (m) is how wide a region the sample stands for: it picks the noise mip level.
 fn sample_density(p: vec3f, cheap: bool, footprint: f32) -> f32 {
@@ -132,7 +127,6 @@ fn sample_density(p: vec3f, cheap: bool, footprint: f32) -> f32 {
     let q = vec3f(sheared.x + u.wind.z, h, sheared.y + u.wind.w);
     let base = textureSampleLevel(base_tex, noise_sampler, q * u.scales.x, lod_for(footprint, base_texel));
     let b = base_density(hf, base, coverage, types, u.layer.z);
-    last_base_density = b * u.shape.y;
     if (b <= 0.0 || cheap) {
         return b * u.shape.y;
     }
