@@ -34,6 +34,28 @@ pub(crate) struct NoiseTextures {
     pub sampler: wgpu::Sampler,
 }
 
+/// Cells per unit of the base volume's Worley octaves (noise_bake.wgsl: fBMs from 4, 4, 8 and
+/// 16 cells, each with octaves at 1x, 2x and 4x).
+const BASE_WORLEY_FREQS: [u32; 5] = [4, 8, 16, 32, 64];
+
+/// Whether `bake_base` (a feature-point table per 4x4x4 workgroup) serves a base volume of
+/// this edge: every octave's cell must span a whole number of texels, at least 2, so that each
+/// workgroup's texels lie in at most 2 cells per axis. Otherwise `bake_base_plain`.
+pub(crate) fn base_table_fits(size: u32) -> bool {
+    BASE_WORLEY_FREQS
+        .iter()
+        .all(|&f| size % f == 0 && size / f >= 2)
+}
+
+/// The bake entry point for a base volume of this edge.
+fn base_entry(size: u32) -> &'static str {
+    if base_table_fits(size) {
+        "bake_base"
+    } else {
+        "bake_base_plain"
+    }
+}
+
 fn mip_count(size: u32) -> u32 {
     size.ilog2() + 1
 }
@@ -152,7 +174,7 @@ impl NoiseTextures {
             label: Some("nimbus noise bake"),
         });
         for (i, (texture, entry, size)) in [
-            (&base, "bake_base", noise.base_size),
+            (&base, base_entry(noise.base_size), noise.base_size),
             (&detail, "bake_detail", noise.detail_size),
         ]
         .into_iter()
@@ -202,6 +224,36 @@ impl NoiseTextures {
         }
     }
 
+    /// Bakes a base volume of edge `size` with the given entry point and returns its mip 0
+    /// (tightly packed RGBA8): for the test that both entry points agree.
+    #[cfg(test)]
+    pub(crate) fn bake_base_texels(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        entry: &str,
+        size: u32,
+        seed: u32,
+    ) -> Vec<u8> {
+        let texture = volume(device, "nimbus base noise (test)", size);
+        let mut encoder = device.create_command_encoder(&Default::default());
+        let params = BakeParams {
+            seed,
+            size,
+            _pad: [0; 2],
+        };
+        let g = size.div_ceil(4);
+        dispatch(
+            device,
+            &mut encoder,
+            &compute_pipeline(device, "noise_bake", entry),
+            Some(bytemuck::bytes_of(&params)),
+            &[(1, &mip_view(&texture, 0))],
+            [g, g, g],
+        );
+        queue.submit([encoder.finish()]);
+        super::readback::read_texture(device, queue, &texture, 0).unwrap()
+    }
+
     /// Bytes held, measured per texture by `texture_bytes`.
     pub fn memory_bytes(&self, texture_bytes: impl Fn(&wgpu::Texture) -> u64) -> u64 {
         texture_bytes(&self.base)
@@ -214,5 +266,38 @@ impl NoiseTextures {
             NoiseVolume::Base => &self.base,
             NoiseVolume::Detail => &self.detail,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The rule behind `base_table_fits`, checked by brute force with the shader's own f32
+    /// arithmetic: where it says yes, every 4-aligned run of texels lies in at most 2 cells of
+    /// every octave (the table holds a 4x4x4 block of cells around them).
+    #[test]
+    fn the_feature_point_table_covers_every_workgroup_where_it_is_used() {
+        let mut used = 0;
+        for size in (3..=8).map(|k| 1u32 << k) {
+            if !base_table_fits(size) {
+                continue;
+            }
+            used += 1;
+            for &f in &BASE_WORLEY_FREQS {
+                let cell = |i: u32| (((i as f32 + 0.5) / size as f32) * f as f32).floor() as i64;
+                for w in 0..size / 4 {
+                    let span = cell(4 * w + 3) - cell(4 * w);
+                    assert!(
+                        span <= 1,
+                        "size {size}, {f} cells: a workgroup spans {span} + 1 cells"
+                    );
+                }
+            }
+        }
+        assert_eq!(used, 2, "the default 128 and 256 use the table");
+        assert!(!base_table_fits(64) && !base_table_fits(100));
+        assert_eq!(base_entry(128), "bake_base");
+        assert_eq!(base_entry(32), "bake_base_plain");
     }
 }
