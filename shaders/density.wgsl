@@ -13,7 +13,12 @@ const PROFILES = array<vec4f, 4>(
 fn height_profile(h: f32, cloud_type: f32) -> f32 {
     let x = clamp(cloud_type, 0.0, 1.0) * 3.0;
     let i = min(u32(floor(x)), 2u);
-    let p = mix(PROFILES[i], PROFILES[i + 1u], x - f32(i));
+    // The two neighbouring profiles by selects, not by a computed index into PROFILES: a
+    // software rasteriser keeps an indexed constant array in scratch memory and gathers from it
+    // lane by lane, per sample and per layer.
+    let lower = select(select(PROFILES[0], PROFILES[1], i == 1u), PROFILES[2], i == 2u);
+    let upper = select(select(PROFILES[1], PROFILES[2], i == 1u), PROFILES[3], i == 2u);
+    let p = mix(lower, upper, x - f32(i));
     let rise = clamp(remap(h, p.x, p.y, 0.0, 1.0), 0.0, 1.0);
     let fall = clamp(remap(h, p.z, p.w, 1.0, 0.0), 0.0, 1.0);
     return rise * fall;
@@ -26,6 +31,13 @@ fn layer_softening(h: f32, softness: f32) -> f32 {
     return clamp(h / softness, 0.0, 1.0) * clamp((1.0 - h) / softness, 0.0, 1.0);
 }
 
+// One layer's base shape: the carved noise under its height profile, eroded by its coverage c
+// (none where c is 0).
+fn layer_cloud(carved: f32, h: f32, c: f32, cloud_type: f32) -> f32 {
+    let cloud = carved * height_profile(h, cloud_type);
+    return select(0.0, clamp(remap(cloud, 1.0 - c, 1.0, 0.0, 1.0), 0.0, 1.0), c > 0.0);
+}
+
 // Base shape before detail erosion. `coverage` holds each layer's effective coverage
 // (global × weather map), `types` each layer's cloud type; the densest layer wins.
 fn base_density(h: f32, base: vec4f, coverage: vec3f, types: vec3f, softness: f32) -> f32 {
@@ -34,15 +46,8 @@ fn base_density(h: f32, base: vec4f, coverage: vec3f, types: vec3f, softness: f3
     }
     let low_freq_fbm = base.g * 0.625 + base.b * 0.25 + base.a * 0.125;
     let carved = remap(base.r, low_freq_fbm - 1.0, 1.0, 0.0, 1.0);
-    var best = 0.0;
-    for (var i = 0; i < 3; i++) {
-        let c = coverage[i];
-        if (c <= 0.0) {
-            continue;
-        }
-        let cloud = carved * height_profile(h, types[i]);
-        best = max(best, clamp(remap(cloud, 1.0 - c, 1.0, 0.0, 1.0), 0.0, 1.0));
-    }
+    // The layers written out, not looped: no computed index into `coverage` and `types`.
+    let best = max(max(layer_cloud(carved, h, coverage.x, types.x), layer_cloud(carved, h, coverage.y, types.y)), layer_cloud(carved, h, coverage.z, types.z));
     return best * layer_softening(h, softness);
 }
 
