@@ -107,6 +107,31 @@ fn mip_view(texture: &wgpu::Texture, mip: u32) -> wgpu::TextureView {
     })
 }
 
+/// Records the bake of a volume's mip 0 by one of noise_bake.wgsl's entry points.
+fn record_bake(
+    device: &wgpu::Device,
+    encoder: &mut wgpu::CommandEncoder,
+    texture: &wgpu::Texture,
+    entry: &str,
+    size: u32,
+    seed: u32,
+) {
+    let params = BakeParams {
+        seed,
+        size,
+        _pad: [0; 2],
+    };
+    let g = size.div_ceil(4);
+    dispatch(
+        device,
+        encoder,
+        &compute_pipeline(device, "noise_bake", entry),
+        Some(bytemuck::bytes_of(&params)),
+        &[(1, &mip_view(texture, 0))],
+        [g, g, g],
+    );
+}
+
 /// Fills mips 1.. of a volume from mip 0.
 fn build_mips(device: &wgpu::Device, encoder: &mut wgpu::CommandEncoder, texture: &wgpu::Texture) {
     let pipeline = compute_pipeline(device, "mip_downsample", "downsample");
@@ -186,20 +211,7 @@ impl NoiseTextures {
                 build_mips(device, &mut encoder, texture);
                 continue;
             }
-            let params = BakeParams {
-                seed: noise.seed,
-                size,
-                _pad: [0; 2],
-            };
-            let g = size.div_ceil(4);
-            dispatch(
-                device,
-                &mut encoder,
-                &compute_pipeline(device, "noise_bake", entry),
-                Some(bytemuck::bytes_of(&params)),
-                &[(1, &mip_view(texture, 0))],
-                [g, g, g],
-            );
+            record_bake(device, &mut encoder, texture, entry, size, noise.seed);
             build_mips(device, &mut encoder, texture);
         }
         queue.submit([encoder.finish()]);
@@ -236,20 +248,7 @@ impl NoiseTextures {
     ) -> Vec<u8> {
         let texture = volume(device, "nimbus base noise (test)", size);
         let mut encoder = device.create_command_encoder(&Default::default());
-        let params = BakeParams {
-            seed,
-            size,
-            _pad: [0; 2],
-        };
-        let g = size.div_ceil(4);
-        dispatch(
-            device,
-            &mut encoder,
-            &compute_pipeline(device, "noise_bake", entry),
-            Some(bytemuck::bytes_of(&params)),
-            &[(1, &mip_view(&texture, 0))],
-            [g, g, g],
-        );
+        record_bake(device, &mut encoder, &texture, entry, size, seed);
         queue.submit([encoder.finish()]);
         super::readback::read_texture(device, queue, &texture, 0).unwrap()
     }
