@@ -18,7 +18,7 @@ use glam::{DVec2, Vec2, Vec3};
 use crate::atmosphere::{altitude, Shell};
 use crate::error::{Error, Result};
 use crate::settings::{DebugDensity, Settings};
-use crate::weather::profile::{height_profile, layer_softening, remap};
+use crate::weather::profile::{eroded_density, layered_base_density};
 use crate::weather::{Timeline, WeatherSample};
 
 /// An RGBA8 texture as read back, sampled like the GPU's repeat / linear sampler.
@@ -290,30 +290,27 @@ impl CloudQuery {
         let qb =
             Vec3::new(sheared.x + base_off.x, h, sheared.y + base_off.y) * (1.0 / n.base_scale);
         let base = d.base.sample(qb);
-        // density.wgsl's base_density: the densest layer wins.
-        let low_freq_fbm = base[1] * 0.625 + base[2] * 0.25 + base[3] * 0.125;
-        let carved = remap(base[0], low_freq_fbm - 1.0, 1.0, 0.0, 1.0);
-        let mut best = 0.0f32;
-        for i in 0..3 {
-            let c = coverage[i];
-            if c <= 0.0 {
-                continue;
-            }
-            let cloud = carved * height_profile(hf, types[i]);
-            best = best.max(remap(cloud, 1.0 - c, 1.0, 0.0, 1.0).clamp(0.0, 1.0));
-        }
-        let b = best * layer_softening(hf, w.clouds.layer_softness);
+        let b = layered_base_density(
+            hf,
+            base,
+            coverage.to_array(),
+            types.to_array(),
+            w.clouds.layer_softness,
+        );
         if b <= 0.0 {
             return 0.0;
         }
         let qd = Vec3::new(sheared.x + detail_off.x, h, sheared.y + detail_off.y)
             * (1.0 / n.detail_scale);
         let detail = d.detail.sample(qd);
-        // density.wgsl's eroded_density.
-        let high_freq_fbm = detail[0] * 0.625 + detail[1] * 0.25 + detail[2] * 0.125;
-        let mut e = high_freq_fbm + (1.0 - 2.0 * high_freq_fbm) * (hf * 5.0).clamp(0.0, 1.0);
-        e *= w.clouds.detail_strength * (-w.clouds.coverage * 0.75).exp();
-        remap(b, e, 1.0, 0.0, 1.0).clamp(0.0, 1.0) * w.clouds.density
+        eroded_density(
+            hf,
+            b,
+            [detail[0], detail[1], detail[2]],
+            w.clouds.coverage,
+            w.clouds.detail_strength,
+            w.clouds.density,
+        )
     }
 
     fn optical_depth(&self, a: Vec3, b: Vec3, sample: &WeatherSample) -> f32 {

@@ -118,24 +118,36 @@ pub struct NoiseSample {
 /// erodes the shape with its own height profile and coverage; the densest layer wins
 /// (Aetherius, "Weather System").
 pub fn base_density(h: f32, s: &NoiseSample, shape: &CloudShape) -> f32 {
+    let coverage = s.coverage.map(|c| shape.coverage * c);
+    layered_base_density(h, s.base, coverage, s.types, shape.layer_softness)
+}
+
+/// [`base_density`] from a base-volume texel and each layer's effective coverage (global ×
+/// weather map, as density.wgsl's `base_density` takes them; the cloud queries too).
+pub fn layered_base_density(
+    h: f32,
+    base: [f32; 4],
+    coverage: [f32; 3],
+    types: [f32; 3],
+    softness: f32,
+) -> f32 {
     if !(0.0..=1.0).contains(&h) {
         return 0.0;
     }
-    let [r, g, b, a] = s.base;
+    let [r, g, b, a] = base;
     let low_freq_fbm = g * 0.625 + b * 0.25 + a * 0.125;
     // Carve the Perlin-Worley shape with the Worley fBM.
     let carved = remap(r, low_freq_fbm - 1.0, 1.0, 0.0, 1.0);
     let mut best = 0.0f32;
     for i in 0..3 {
         // Coverage erodes the shape: only the densest parts survive low coverage.
-        let coverage = shape.coverage * s.coverage[i];
-        if coverage <= 0.0 {
+        if coverage[i] <= 0.0 {
             continue;
         }
-        let cloud = carved * height_profile(h, s.types[i]);
-        best = best.max(saturate(remap(cloud, 1.0 - coverage, 1.0, 0.0, 1.0)));
+        let cloud = carved * height_profile(h, types[i]);
+        best = best.max(saturate(remap(cloud, 1.0 - coverage[i], 1.0, 0.0, 1.0)));
     }
-    best * layer_softening(h, shape.layer_softness)
+    best * layer_softening(h, softness)
 }
 
 /// The full density (before multiplying by extinction): base shape eroded by detail noise,
@@ -145,13 +157,32 @@ pub fn density(h: f32, s: &NoiseSample, shape: &CloudShape) -> f32 {
     if base <= 0.0 {
         return 0.0;
     }
-    let [r, g, b] = s.detail;
+    eroded_density(
+        h,
+        base,
+        s.detail,
+        shape.coverage,
+        shape.detail_strength,
+        shape.density,
+    )
+}
+
+/// density.wgsl's `eroded_density`: the base shape `base` eroded by a detail-volume texel,
+/// wispy (fBM) at the bottom and billowy (inverted fBM) from a fifth of the way up, times the
+/// global `density`; `coverage` is the global coverage (less erosion under more cloud).
+pub fn eroded_density(
+    h: f32,
+    base: f32,
+    detail: [f32; 3],
+    coverage: f32,
+    strength: f32,
+    density: f32,
+) -> f32 {
+    let [r, g, b] = detail;
     let high_freq_fbm = r * 0.625 + g * 0.25 + b * 0.125;
-    // Wispy (fBM) at the bottom, billowy (inverted fBM) from a fifth of the way up.
-    let mut detail = high_freq_fbm + (1.0 - 2.0 * high_freq_fbm) * saturate(h * 5.0);
-    detail *= shape.detail_strength * (-shape.coverage * 0.75).exp();
-    let eroded = saturate(remap(base, detail, 1.0, 0.0, 1.0));
-    eroded * shape.density
+    let mut erosion = high_freq_fbm + (1.0 - 2.0 * high_freq_fbm) * saturate(h * 5.0);
+    erosion *= strength * (-coverage * 0.75).exp();
+    saturate(remap(base, erosion, 1.0, 0.0, 1.0)) * density
 }
 
 #[cfg(test)]
