@@ -188,29 +188,8 @@ fn reference_cache(
     key.lighting.light_lod = defaults.light_lod;
     let mut hasher = std::collections::hash_map::DefaultHasher::new();
     format!("{key:?}|{f:?}|{size:?}|{spp}|{seed}").hash(&mut hasher);
-    // A changed path tracer (or medium) traces anew: the modules of its pass.
-    for source in [
-        include_str!("../shaders/common.wgsl"),
-        include_str!("../shaders/depth.wgsl"),
-        include_str!("../shaders/atmosphere.wgsl"),
-        include_str!("../shaders/phase.wgsl"),
-        include_str!("../shaders/medium.wgsl"),
-        include_str!("../shaders/path_trace.wgsl"),
-    ] {
-        source.hash(&mut hasher);
-    }
-    // The noise model's views also depend on the density model and on what the noise and
-    // weather bakes put in their textures (the debug media read none of it).
-    if settings.debug_density == DebugDensity::Off {
-        for source in [
-            include_str!("../shaders/density.wgsl"),
-            include_str!("../shaders/noise.wgsl"),
-            include_str!("../shaders/noise_bake.wgsl"),
-            include_str!("../shaders/weather_bake.wgsl"),
-        ] {
-            source.hash(&mut hasher);
-        }
-    }
+    // A changed path tracer, medium, density model or noise bake traces anew.
+    PathTracer::source_id().hash(&mut hasher);
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/fidelity-cache");
     std::fs::create_dir_all(&dir).ok()?;
     Some(dir.join(format!("{:016x}.bin", hasher.finish())))

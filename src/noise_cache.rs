@@ -41,7 +41,7 @@ pub const HEADER_BYTES: usize = 48;
 /// (or even its comments, which is merely conservative) makes older caches unusable. The
 /// modules are the bake pass's own list (`NOISE_BAKE_MODULES`, which `PASSES` uses), so a
 /// module added to the pass is hashed too.
-const fn source_hash(modules: &[(&str, &str)]) -> u32 {
+pub(crate) const fn source_hash(modules: &[(&str, &str)]) -> u32 {
     let mut h: u32 = 0x811c_9dc5;
     let mut p = 0;
     while p < modules.len() {
@@ -325,11 +325,7 @@ mod tests {
     fn bake_id_follows_the_shader_source() {
         assert_ne!(source_hash(&[("x", "a")]), source_hash(&[("x", "b")]));
         // The id hashes exactly the modules the bake pipeline is built from.
-        let pass = crate::gpu::shaders::PASSES
-            .iter()
-            .find(|(name, _)| *name == "noise_bake")
-            .map(|(_, modules)| *modules)
-            .unwrap();
+        let pass = crate::gpu::shaders::pass_modules("noise_bake");
         assert_eq!(BAKE_ID, source_hash(pass));
         let mut changed: Vec<(&str, &str)> = pass.to_vec();
         let edited = format!("{} ", changed[1].1);

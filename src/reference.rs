@@ -65,6 +65,19 @@ pub struct PathTracer {
 }
 
 impl PathTracer {
+    /// An id of the shader sources a traced image depends on: the path tracer's pass (medium,
+    /// density model, phases) and the noise and weather bakes that make the medium. The same
+    /// id, settings, view, sample count and seed trace the same image, so a host (or the
+    /// fidelity benchmark) can key a cache of references by it.
+    pub fn source_id() -> u32 {
+        use crate::gpu::shaders::pass_modules;
+        let modules: Vec<(&str, &str)> = ["path_trace", "noise_bake", "weather_bake"]
+            .into_iter()
+            .flat_map(|pass| pass_modules(pass).iter().copied())
+            .collect();
+        crate::noise_cache::source_hash(&modules)
+    }
+
     /// A path tracer for `width` × `height` images on `renderer`'s device, counting `orders`.
     pub fn new(renderer: &Renderer, width: u32, height: u32, orders: Orders) -> Result<Self> {
         if width == 0 || height == 0 || width > MAX_REFERENCE_SIZE || height > MAX_REFERENCE_SIZE {
@@ -237,5 +250,23 @@ impl PathTracer {
             .iter()
             .map(|p| p.map(|c| c / n))
             .collect())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::noise_cache::source_hash;
+
+    /// The id covers what makes the medium, not only the tracer's own file: the density
+    /// model and the noise bake are among its modules, and leaving either out changes it.
+    #[test]
+    fn the_source_id_covers_the_medium_and_the_bakes() {
+        let id = PathTracer::source_id();
+        assert_eq!(id, PathTracer::source_id());
+        let tracer = crate::gpu::shaders::pass_modules("path_trace");
+        assert!(tracer.iter().any(|(name, _)| *name == "density.wgsl"));
+        assert_ne!(id, source_hash(tracer), "the bakes count");
+        assert_ne!(id, crate::noise_cache::BAKE_ID, "the tracer counts");
     }
 }

@@ -94,14 +94,19 @@ fn depth_binding(kind: DepthKind, binding: &str) -> String {
     }
 }
 
-/// The full source of a pass, its scene-depth placeholder (`//!SCENE_DEPTH_BINDING(n)`)
-/// replaced by the binding variant for `depth`.
-pub(crate) fn pass_source(pass: &str, depth: DepthKind) -> String {
-    let modules = PASSES
+/// The modules `pass` is built from, in order (its entry in `PASSES`).
+pub(crate) fn pass_modules(pass: &str) -> &'static [(&'static str, &'static str)] {
+    PASSES
         .iter()
         .find(|(name, _)| *name == pass)
         .map(|(_, m)| *m)
-        .unwrap_or_else(|| unreachable!("unknown pass {pass}"));
+        .unwrap_or_else(|| unreachable!("unknown pass {pass}"))
+}
+
+/// The full source of a pass, its scene-depth placeholder (`//!SCENE_DEPTH_BINDING(n)`)
+/// replaced by the binding variant for `depth`.
+pub(crate) fn pass_source(pass: &str, depth: DepthKind) -> String {
+    let modules = pass_modules(pass);
     let mut src = String::new();
     for (name, text) in modules {
         src.push_str(&format!("// ---- {name}\n"));
