@@ -31,24 +31,38 @@ fn layer_softening(h: f32, softness: f32) -> f32 {
     return clamp(h / softness, 0.0, 1.0) * clamp((1.0 - h) / softness, 0.0, 1.0);
 }
 
+// The three layers' height profiles at h.
+fn layer_profiles(h: f32, types: vec3f) -> vec3f {
+    return vec3f(height_profile(h, types.x), height_profile(h, types.y), height_profile(h, types.z));
+}
+
 // One layer's base shape: the carved noise under its height profile, eroded by its coverage c
 // (none where c is 0).
-fn layer_cloud(carved: f32, h: f32, c: f32, cloud_type: f32) -> f32 {
-    let cloud = carved * height_profile(h, cloud_type);
+fn layer_cloud(carved: f32, profile: f32, c: f32) -> f32 {
+    let cloud = carved * profile;
     return select(0.0, clamp(remap(cloud, 1.0 - c, 1.0, 0.0, 1.0), 0.0, 1.0), c > 0.0);
 }
 
-// Base shape before detail erosion. `coverage` holds each layer's effective coverage
-// (global × weather map), `types` each layer's cloud type; the densest layer wins.
-fn base_density(h: f32, base: vec4f, coverage: vec3f, types: vec3f, softness: f32) -> f32 {
-    if (h < 0.0 || h > 1.0) {
-        return 0.0;
-    }
+// The densest layer's base shape. The layers written out, not looped: no computed index into
+// `profiles` and `coverage`.
+fn layers_cloud(carved: f32, profiles: vec3f, coverage: vec3f) -> f32 {
+    return max(max(layer_cloud(carved, profiles.x, coverage.x), layer_cloud(carved, profiles.y, coverage.y)), layer_cloud(carved, profiles.z, coverage.z));
+}
+
+// Whether any layer can have cloud here, whatever the noise: the carved noise is at most 1 (in
+// f32 too: base.r <= 1) and a layer's cloud never falls as it grows, so its cloud at carved = 1
+// bounds it. Where this is false the base density is exactly 0 and the noise need not be read.
+fn layers_can_cloud(profiles: vec3f, coverage: vec3f) -> bool {
+    return layers_cloud(1.0, profiles, coverage) > 0.0;
+}
+
+// Base shape before detail erosion at h in [0, 1] (profile::layered_base_density). `coverage`
+// holds each layer's effective coverage (global × weather map), `profiles` each layer's height
+// profile at h (layer_profiles); the densest layer wins.
+fn profiled_base_density(h: f32, base: vec4f, coverage: vec3f, profiles: vec3f, softness: f32) -> f32 {
     let low_freq_fbm = base.g * 0.625 + base.b * 0.25 + base.a * 0.125;
     let carved = remap(base.r, low_freq_fbm - 1.0, 1.0, 0.0, 1.0);
-    // The layers written out, not looped: no computed index into `coverage` and `types`.
-    let best = max(max(layer_cloud(carved, h, coverage.x, types.x), layer_cloud(carved, h, coverage.y, types.y)), layer_cloud(carved, h, coverage.z, types.z));
-    return best * layer_softening(h, softness);
+    return layers_cloud(carved, profiles, coverage) * layer_softening(h, softness);
 }
 
 // Detail erosion: wispy at the bottom, billowy higher up; returns density before extinction.

@@ -285,8 +285,11 @@ fn march_ray(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32) 
             let p = cam + dir * t;
             let footprint = t * pixel_angle;
             samples += 1u;
+            // One density call for both kinds of step (the probe without the detail), so that a
+            // SIMD batch of rays in both modes does not evaluate the density twice per step.
+            let density = sample_density(p, !fine, footprint);
             if (!fine) {
-                if (sample_density(p, true, footprint) > 0.0) {
+                if (density > 0.0) {
                     fine = true;
                     empty_run = 0u;
                 } else {
@@ -295,7 +298,6 @@ fn march_ray(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32) 
                 continue;
             }
             i += 1u;
-            let density = sample_density(p, false, footprint);
             if (density <= 0.0) {
                 empty_run += 1u;
                 if (coarse_on && empty_run >= FINE_EMPTY) {
@@ -312,11 +314,13 @@ fn march_ray(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32) 
             }
             let sigma_t = density * u.shape.z;
             let tau = sun_optical_depth(p, light_step_count(t), footprint);
-            // Wrenninge 2015 multiple-scattering octaves.
-            var ms = 0.0;
-            var a_i = 1.0;
-            var b_i = 1.0;
-            for (var o = 0u; o < octaves; o++) {
+            // Wrenninge 2015 multiple-scattering octaves. The first (single scattering) out of
+            // the loop: the others index phase_oct by the loop counter, which a software
+            // rasteriser gathers from scratch memory lane by lane.
+            var ms = phase_oct[0] * exp(-tau);
+            var a_i = u.ms.y;
+            var b_i = u.ms.z;
+            for (var o = 1u; o < octaves; o++) {
                 ms += b_i * phase_oct[o] * exp(-a_i * tau);
                 a_i *= u.ms.y;
                 b_i *= u.ms.z;

@@ -118,15 +118,18 @@ fn sample_density(p: vec3f, cheap: bool, footprint: f32) -> f32 {
         coverage.x = mix(coverage.x, max(coverage.x, u.horizon.z), g);
         types.x = mix(types.x, u.horizon.w, g);
     }
-    // Empty space is cheap: no coverage here means no base or detail fetch at all.
-    if (max(coverage.x, max(coverage.y, coverage.z)) <= 0.0) {
+    // Empty space is cheap: where no layer's height profile reaches above its coverage
+    // threshold (no coverage at all, above the tops, below the bases) the density is exactly 0
+    // without the base or detail noise.
+    let profiles = layer_profiles(hf, types);
+    if (!layers_can_cloud(profiles, coverage)) {
         return 0.0;
     }
     // Wind shear: higher parts of a cloud lean downwind.
     let sheared = horizontal_of(p + u.skew.xyz * hf);
     let q = vec3f(sheared.x + u.wind.z, h, sheared.y + u.wind.w);
     let base = textureSampleLevel(base_tex, noise_sampler, q * u.scales.x, lod_for(footprint, base_texel));
-    let b = base_density(hf, base, coverage, types, u.layer.z);
+    let b = profiled_base_density(hf, base, coverage, profiles, u.layer.z);
     if (b <= 0.0 || cheap) {
         return b * u.shape.y;
     }

@@ -18,7 +18,7 @@ use glam::{DVec2, Vec2, Vec3};
 use crate::atmosphere::{altitude, Shell};
 use crate::error::{Error, Result};
 use crate::settings::{DebugDensity, Settings};
-use crate::weather::profile::{eroded_density, layered_base_density};
+use crate::weather::profile::{eroded_density, layered_base_density, layers_can_cloud};
 use crate::weather::{Timeline, WeatherSample};
 
 /// An RGBA8 texture as read back, sampled like the GPU's repeat / linear sampler.
@@ -277,7 +277,7 @@ impl CloudQuery {
             return 0.0;
         }
         let (coverage, types) = self.coverage_and_types(p, sample);
-        if coverage.max_element() <= 0.0 {
+        if !layers_can_cloud(hf, coverage.to_array(), types.to_array()) {
             return 0.0;
         }
         let wind_dir = w.wind.direction.normalize_or_zero();

@@ -123,7 +123,7 @@ pub fn base_density(h: f32, s: &NoiseSample, shape: &CloudShape) -> f32 {
 }
 
 /// [`base_density`] from a base-volume texel and each layer's effective coverage (global ×
-/// weather map, as density.wgsl's `base_density` takes them; the cloud queries too).
+/// weather map, as density.wgsl's `profiled_base_density` takes them; the cloud queries too).
 pub fn layered_base_density(
     h: f32,
     base: [f32; 4],
@@ -138,16 +138,36 @@ pub fn layered_base_density(
     let low_freq_fbm = g * 0.625 + b * 0.25 + a * 0.125;
     // Carve the Perlin-Worley shape with the Worley fBM.
     let carved = remap(r, low_freq_fbm - 1.0, 1.0, 0.0, 1.0);
-    let mut best = 0.0f32;
-    for i in 0..3 {
-        // Coverage erodes the shape: only the densest parts survive low coverage.
-        if coverage[i] <= 0.0 {
-            continue;
-        }
-        let cloud = carved * height_profile(h, types[i]);
-        best = best.max(saturate(remap(cloud, 1.0 - coverage[i], 1.0, 0.0, 1.0)));
-    }
+    let best = (0..3)
+        .map(|i| layer_cloud(carved, h, coverage[i], types[i]))
+        .fold(0.0f32, f32::max);
     best * layer_softening(h, softness)
+}
+
+/// One layer's base shape for the carved noise `carved`: coverage `c` erodes the shape under
+/// the layer's height profile, so only the densest parts survive low coverage (none where `c`
+/// is 0).
+fn layer_cloud(carved: f32, h: f32, c: f32, cloud_type: f32) -> f32 {
+    if c <= 0.0 {
+        return 0.0;
+    }
+    saturate(remap(
+        carved * height_profile(h, cloud_type),
+        1.0 - c,
+        1.0,
+        0.0,
+        1.0,
+    ))
+}
+
+/// Whether any layer can have cloud at height fraction `h` whatever the noise
+/// (density.wgsl's `layers_can_cloud`). The carved noise is at most 1, in f32 too, and a
+/// layer's cloud never falls as the carved noise grows (every step is monotonic), so its cloud
+/// at carved = 1 bounds it: where this is false, [`layered_base_density`] is exactly 0 for
+/// every base texel, and the march, the light march and the cloud queries skip the noise
+/// fetches (above a layer's tops, below its bases, outside its coverage).
+pub fn layers_can_cloud(h: f32, coverage: [f32; 3], types: [f32; 3]) -> bool {
+    (0..3).any(|i| layer_cloud(1.0, h, coverage[i], types[i]) > 0.0)
 }
 
 /// The full density (before multiplying by extinction): base shape eroded by detail noise,
@@ -229,6 +249,44 @@ mod tests {
         // High in the layer only the cumulonimbus reaches.
         assert_eq!(base_density(0.6, &only(0), &shape), 0.0);
         assert!(base_density(0.6, &both, &shape) > 0.0);
+    }
+
+    /// The march skips the noise fetches where `layers_can_cloud` is false: there the base
+    /// density must be exactly 0 for every base texel, including the extremes of the carving.
+    #[test]
+    fn no_layer_can_cloud_means_no_base_density() {
+        let levels = [0.0, 1e-7, 0.01, 0.25, 0.5, 0.6, 0.75, 0.99, 1.0];
+        let mut skipped_with_coverage = 0;
+        let mut seed = 0x9e37_79b9u32;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 17;
+            seed ^= seed << 5;
+            (seed >> 8) as f32 / (1u32 << 24) as f32
+        };
+        for hi in 0..=200 {
+            let h = hi as f32 / 200.0;
+            for &c in &levels {
+                for &t in &[0.0, 0.2, 1.0 / 3.0, 0.5, 0.7, 1.0] {
+                    let coverage = [c, 0.5 * c, 0.0];
+                    let types = [t, 1.0 - t, 0.5];
+                    if layers_can_cloud(h, coverage, types) {
+                        continue;
+                    }
+                    skipped_with_coverage += usize::from(c > 0.0);
+                    let mut bases = vec![[1.0; 4], [1.0, 0.0, 0.0, 0.0], [1.0, 1.0, 1.0, 1.0]];
+                    bases.extend((0..16).map(|_| [next(), next(), next(), next()]));
+                    for base in bases {
+                        let d = layered_base_density(h, base, coverage, types, 0.05);
+                        assert_eq!(d, 0.0, "h {h} c {c} t {t} base {base:?}");
+                    }
+                }
+            }
+        }
+        // The bound skips real work: covered columns above their tops and below their bases.
+        assert!(skipped_with_coverage > 1000, "{skipped_with_coverage}");
+        // ...and never where a layer's profile peaks under full coverage.
+        assert!(layers_can_cloud(0.3, [1.0, 0.0, 0.0], [0.5, 0.0, 0.0]));
     }
 
     #[test]
