@@ -11,6 +11,11 @@ struct ShadowSampling {
 @group(0) @binding(10) var shadow_map: texture_2d<f32>;
 @group(0) @binding(11) var<storage, read> shadow_sampling: ShadowSampling;
 
+// Whether a pipeline can take the light march's long part from the shadow map (a
+// pipeline-overridable constant, MarchVariant in src/gpu/march.rs): 0 never (the setting is off),
+// 1, the default, as u.shadow_light.x says. See MEDIUM in medium.wgsl for why.
+override SHADOW_LIGHT: u32 = 1u;
+
 // Density samples taken toward the sun by this invocation (the per-ray counter).
 var<private> light_samples: u32;
 
@@ -84,7 +89,7 @@ fn sun_optical_depth(p: vec3f, n: u32, footprint: f32) -> f32 {
     // depth from there to the sun from the map: min(mean extinction * (depth - front), total).
     // The map covers the whole path (no light_distance cut). Outside its square: march.
     var tau_map = 0.0;
-    if (u.shadow_light.x > 0.5 && shadow_sampling.window.w > 0.5) {
+    if (SHADOW_LIGHT != 0u && u.shadow_light.x > 0.5 && shadow_sampling.window.w > 0.5) {
         let local = min(u.shadow_light.y, light_exit(p, d));
         let q = p + d * local;
         let m = shadow_sampling.world_to_map * vec4f(q, 1.0);

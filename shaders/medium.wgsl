@@ -62,7 +62,17 @@ fn lod_for(footprint: f32, texel: f32) -> f32 {
     return log2(footprint / texel);
 }
 
+// The medium a pipeline is built for (a pipeline-overridable constant, MarchVariant in
+// src/gpu/march.rs): 0 the noise model, 1 the debug slab, 2 the debug sphere; 3, the default,
+// as the frame parameters say (the passes that do not specialise). A software rasteriser runs
+// every branch's body under a mask, taken or not: with the medium a constant, the noise model's
+// march carries none of the debug media's code.
+override MEDIUM: u32 = 3u;
+
 fn debug_mode() -> u32 {
+    if (MEDIUM < 3u) {
+        return MEDIUM;
+    }
     return u32(u.misc.z);
 }
 
@@ -74,19 +84,16 @@ fn horizontal_of(p: vec3f) -> vec2f {
     return vec2f(dot(p, u.tangent_x.xyz), dot(p, u.tangent_z.xyz));
 }
 
-// The weather map at a horizontal position: the running transition's two maps, blended.
+// The weather map at a horizontal position: the running transition's two maps, blended. Both
+// maps are read and the weight picks (exactly the "to" map at w >= 1, the "from" map at
+// w <= 0): a software rasteriser runs every branch's fetch whether taken or not, so early
+// returns cost a third fetch.
 fn weather_at(horizontal: vec2f) -> vec4f {
     let uv = (horizontal + u.wind.xy) * u.scales.z;
     let w = u.layer_types.w;
-    // Outside a transition only one map counts: one fetch (uniform branch, no divergence).
-    if (w >= 1.0) {
-        return textureSampleLevel(weather_to, noise_sampler, uv, 0.0);
-    }
     let a = textureSampleLevel(weather_from, noise_sampler, uv, 0.0);
-    if (w <= 0.0) {
-        return a;
-    }
-    return mix(a, textureSampleLevel(weather_to, noise_sampler, uv, 0.0), w);
+    let b = textureSampleLevel(weather_to, noise_sampler, uv, 0.0);
+    return select(select(mix(a, b, w), a, w <= 0.0), b, w >= 1.0);
 }
 
 // Unitless density at p (σt = density × extinction); `cheap` skips the detail erosion.

@@ -11,7 +11,7 @@ use crate::error::{invalid_target, Error, Result};
 use crate::frame::FrameInputs;
 use crate::gpu::ambient::AmbientPipeline;
 use crate::gpu::composite::{CompositeCache, CompositeInputs, CompositeUniforms};
-use crate::gpu::march::{MarchPipeline, MarchUniforms};
+use crate::gpu::march::{MarchPipeline, MarchUniforms, MarchVariant};
 use crate::gpu::noise::{NoiseTextures, NoiseVolume};
 use crate::gpu::shaders::DepthKind;
 use crate::gpu::shadow::{NoShadow, ShadowFrame, ShadowPass};
@@ -956,6 +956,7 @@ impl Renderer {
                 &sized.fresh_stats.view,
                 shadow,
                 (fresh.clouds.texture.width(), fresh.clouds.texture.height()),
+                MarchVariant::of(&uniforms),
                 self.timer.as_ref(),
             );
             let resolved = if temporal.enabled {
@@ -1208,9 +1209,12 @@ impl Renderer {
         })
     }
 
-    /// Number of composite pipelines built so far (one per output format and mode).
+    /// Number of pipelines built on demand so far: composite pipelines (one per output format
+    /// and mode) and march specialisations (one per scene-depth kind, medium and shadow-map
+    /// light setting used; the noise model's without the shadow-map light are built at
+    /// creation). Settings and new target formats add pipelines; frames never do.
     pub fn cached_pipeline_count(&self) -> usize {
-        self.composite.len()
+        self.composite.len() + self.passes.march_variant_count()
     }
 
     /// Bind groups the per-frame passes have made so far. They are made when the bound
@@ -1340,6 +1344,10 @@ impl ComputePasses {
             temporal_r32: TemporalPipeline::new(device, DepthKind::R32Float),
             ambient: AmbientPipeline::new(device),
         }
+    }
+
+    fn march_variant_count(&self) -> usize {
+        self.march_depth.variant_count() + self.march_r32.variant_count()
     }
 
     fn for_depth(&mut self, kind: DepthKind) -> (&mut MarchPipeline, &mut TemporalPipeline) {

@@ -1039,6 +1039,50 @@ fn renderer_refuses_bad_targets_and_turns_wgpu_errors_into_errors() {
     ));
 }
 
+/// The march's pipeline is specialised per medium and shadow-map light (a software rasteriser
+/// pays for untaken branches): a settings change that asks for another specialisation builds
+/// it once, frames never do, and going back reuses the first. That each draws what its
+/// settings ask is what the debug-media and shadow-map tests check.
+#[test]
+fn march_specialisations_are_built_per_setting_not_per_frame() {
+    let settings = small_noise(1);
+    let mut h = headless(settings.clone());
+    let frame = standard_views()[0].frame(W, H, 0.0);
+    let frames = |h: &mut Headless, s: &Settings| {
+        h.renderer_mut().set_settings(s.clone()).unwrap();
+        for _ in 0..3 {
+            h.render(&frame).unwrap();
+        }
+        h.renderer().cached_pipeline_count()
+    };
+    let base = frames(&mut h, &settings);
+    assert_eq!(frames(&mut h, &settings), base, "frames built a pipeline");
+    let mut slab = settings.clone();
+    slab.debug_density = DebugDensity::Slab {
+        bottom_altitude: 1_000.0,
+        top_altitude: 1_500.0,
+        density: 1.0,
+    };
+    assert_eq!(frames(&mut h, &slab), base + 1, "the slab's march");
+    assert_eq!(frames(&mut h, &slab), base + 1);
+    assert_eq!(
+        frames(&mut h, &settings),
+        base + 1,
+        "the noise model's again"
+    );
+    let mut shadow_light = settings.clone();
+    shadow_light.shadows.enabled = true;
+    shadow_light.shadows.march_light = true;
+    assert_eq!(
+        frames(&mut h, &shadow_light),
+        base + 2,
+        "the shadow-map light's"
+    );
+    // The map on, its light off: the pipeline without the shadow-map light serves.
+    shadow_light.shadows.march_light = false;
+    assert_eq!(frames(&mut h, &shadow_light), base + 2);
+}
+
 #[test]
 fn the_dual_lobe_phase_model_renders_and_changes_the_light() {
     let view = standard_views()[1]; // low sun: the phase function matters most

@@ -168,28 +168,70 @@ pub(crate) fn frame_pipeline(
     entry: &str,
     entries: &[wgpu::BindGroupLayoutEntry],
 ) -> (wgpu::BindGroupLayout, wgpu::ComputePipeline) {
-    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some(label),
-        entries,
-    });
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some(label),
-        bind_group_layouts: &[Some(&layout)],
-        immediate_size: 0,
-    });
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some(label),
-        source: wgpu::ShaderSource::Wgsl(pass_source(pass, kind).into()),
-    });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some(label),
-        layout: Some(&pipeline_layout),
-        module: &module,
-        entry_point: Some(entry),
-        compilation_options: Default::default(),
-        cache: None,
-    });
-    (layout, pipeline)
+    let parts = FramePipelineParts::new(device, label, pass, kind, entries);
+    let pipeline = parts.pipeline(device, label, entry, &[]);
+    (parts.layout, pipeline)
+}
+
+/// What the pipelines of one per-frame pass share when it builds several specialisations
+/// (pipeline-overridable constants): the bind-group layout (so every specialisation takes the
+/// same bind groups), the pipeline layout and the shader module.
+pub(crate) struct FramePipelineParts {
+    pub layout: wgpu::BindGroupLayout,
+    pipeline_layout: wgpu::PipelineLayout,
+    module: wgpu::ShaderModule,
+}
+
+impl FramePipelineParts {
+    /// The layout from `entries`, the module from `pass` with its depth-binding variant.
+    pub(crate) fn new(
+        device: &wgpu::Device,
+        label: &str,
+        pass: &str,
+        kind: DepthKind,
+        entries: &[wgpu::BindGroupLayoutEntry],
+    ) -> Self {
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some(label),
+            entries,
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(label),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(label),
+            source: wgpu::ShaderSource::Wgsl(pass_source(pass, kind).into()),
+        });
+        Self {
+            layout,
+            pipeline_layout,
+            module,
+        }
+    }
+
+    /// A pipeline of `entry` with the pipeline-overridable `constants` set (the others keep
+    /// their defaults).
+    pub(crate) fn pipeline(
+        &self,
+        device: &wgpu::Device,
+        label: &str,
+        entry: &str,
+        constants: &[(&str, f64)],
+    ) -> wgpu::ComputePipeline {
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(label),
+            layout: Some(&self.pipeline_layout),
+            module: &self.module,
+            entry_point: Some(entry),
+            compilation_options: wgpu::PipelineCompilationOptions {
+                constants,
+                ..Default::default()
+            },
+            cache: None,
+        })
+    }
 }
 
 /// Records one 8×8-workgroup dispatch over `size` invocations, with timestamps for `which`

@@ -5,7 +5,9 @@ use bytemuck::{Pod, Zeroable};
 use glam::{DVec2, Mat4, Vec3};
 
 use super::bind_cache::BindCache;
-use super::compute::{frame_pipeline, params_entry, storage_entry, texture_entry, timed_dispatch};
+use super::compute::{
+    params_entry, storage_entry, texture_entry, timed_dispatch, FramePipelineParts,
+};
 use super::noise::NoiseTextures;
 use super::shaders::DepthKind;
 use crate::frame::{CameraDerived, FrameInputs};
@@ -370,9 +372,46 @@ pub(crate) fn medium_entries<'a>(
     ]
 }
 
+/// What a march pipeline is specialised for (the pipeline-overridable constants `MEDIUM` in
+/// shaders/medium.wgsl and `SHADOW_LIGHT` in shaders/march_ray.wgsl). A software rasteriser
+/// runs the body of every branch under a mask, taken or not, so a pipeline that could draw the
+/// debug media or take its light from the shadow map pays for their code at every sample of
+/// every frame (about 10% of a frame on lavapipe, docs/performance.md); the constants remove it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(crate) struct MarchVariant {
+    /// 0 the noise model, 1 the debug slab, 2 the debug sphere.
+    pub medium: u32,
+    /// The light march reads the cloud shadow map for the long part of its path.
+    pub shadow_light: bool,
+}
+
+impl MarchVariant {
+    /// The variant the frame parameters ask for: the pipeline then draws exactly what the
+    /// generic one would with them.
+    pub(crate) fn of(u: &MarchUniforms) -> Self {
+        Self {
+            medium: u.misc[2] as u32,
+            shadow_light: u.shadow_light[0] > 0.5,
+        }
+    }
+
+    fn constants(self) -> [(&'static str, f64); 2] {
+        [
+            ("MEDIUM", f64::from(self.medium)),
+            ("SHADOW_LIGHT", f64::from(u32::from(self.shadow_light))),
+        ]
+    }
+}
+
+/// How many specialisations a march pipeline keeps at most: the three media with and without
+/// the shadow-map light.
+const MAX_VARIANTS: usize = 6;
+
 pub(crate) struct MarchPipeline {
-    pub layout: wgpu::BindGroupLayout,
-    pub pipeline: wgpu::ComputePipeline,
+    parts: FramePipelineParts,
+    /// The specialisations built so far: the noise model's at creation, the others at the
+    /// first frame whose settings ask for them (a settings change, never per frame).
+    variants: Vec<(MarchVariant, wgpu::ComputePipeline)>,
     /// Bind groups by the views they bind; `uniforms` is the renderer's one buffer.
     pub binds: BindCache,
 }
@@ -385,12 +424,11 @@ impl MarchPipeline {
             DepthKind::Depth => S::Depth,
             DepthKind::R32Float => S::Float { filterable: false },
         };
-        let (layout, pipeline) = frame_pipeline(
+        let parts = FramePipelineParts::new(
             device,
             "nimbus march",
             "march",
             kind,
-            "march",
             &[
                 medium_layout_entries().as_slice(),
                 &[
@@ -403,11 +441,39 @@ impl MarchPipeline {
             ]
             .concat(),
         );
-        Self {
-            layout,
-            pipeline,
+        let mut pipeline = Self {
+            parts,
+            variants: Vec::with_capacity(MAX_VARIANTS),
             binds: BindCache::default(),
-        }
+        };
+        pipeline.variant(
+            device,
+            MarchVariant {
+                medium: 0,
+                shadow_light: false,
+            },
+        );
+        pipeline
+    }
+
+    /// The pipeline specialised for `variant`, built on first use.
+    fn variant(&mut self, device: &wgpu::Device, variant: MarchVariant) -> &wgpu::ComputePipeline {
+        let index = match self.variants.iter().position(|(v, _)| *v == variant) {
+            Some(i) => i,
+            None => {
+                let pipeline =
+                    self.parts
+                        .pipeline(device, "nimbus march", "march", &variant.constants());
+                self.variants.push((variant, pipeline));
+                self.variants.len() - 1
+            }
+        };
+        &self.variants[index].1
+    }
+
+    /// How many specialisations have been built.
+    pub(crate) fn variant_count(&self) -> usize {
+        self.variants.len()
     }
 
     /// Records the march dispatch over the sparse grid of `size` invocations.
@@ -425,6 +491,7 @@ impl MarchPipeline {
         stats_out: &wgpu::TextureView,
         shadow: (&wgpu::TextureView, &wgpu::Buffer),
         size: (u32, u32),
+        variant: MarchVariant,
         timer: Option<&super::timing::GpuTimer>,
     ) {
         let tex = |b, v| wgpu::BindGroupEntry {
@@ -435,7 +502,7 @@ impl MarchPipeline {
         // The shadow buffer belongs to the shadow view's pass (or is the renderer's stand-in
         // with its stand-in view): the view alone keys it.
         views.extend([scene_depth, march_out, depth_out, stats_out, shadow.0]);
-        let layout = &self.layout;
+        let layout = &self.parts.layout;
         let bind = self.binds.get(uniforms, &views, || {
             let mut entries = medium_entries(uniforms, noise, weather);
             entries.extend([
@@ -455,10 +522,11 @@ impl MarchPipeline {
                 entries: &entries,
             })
         });
+        let pipeline = self.variant(device, variant);
         timed_dispatch(
             encoder,
             "nimbus march",
-            &self.pipeline,
+            pipeline,
             &bind,
             size,
             timer,
