@@ -125,9 +125,9 @@ fn sample_density(p: vec3f, cheap: bool, footprint: f32) -> f32 {
         coverage.x = mix(coverage.x, max(coverage.x, u.horizon.z), g);
         types.x = mix(types.x, u.horizon.w, g);
     }
-    // Empty space is cheap: where no layer's height profile reaches above its coverage
-    // threshold (no coverage at all, above the tops, below the bases) the density is exactly 0
-    // without the base or detail noise.
+    // Where no layer's height profile reaches above its coverage threshold (no coverage at
+    // all, above the tops, below the bases) the density is exactly 0 without the base or detail
+    // noise: a GPU skips the fetches there (llvmpipe runs them under a mask all the same).
     let profiles = layer_profiles(hf, types);
     if (!layers_can_cloud(profiles, coverage)) {
         return 0.0;

@@ -403,14 +403,11 @@ impl MarchVariant {
     }
 }
 
-/// How many specialisations a march pipeline keeps at most: the three media with and without
-/// the shadow-map light.
-const MAX_VARIANTS: usize = 6;
-
 pub(crate) struct MarchPipeline {
     parts: FramePipelineParts,
-    /// The specialisations built so far: the noise model's at creation, the others at the
-    /// first frame whose settings ask for them (a settings change, never per frame).
+    /// The specialisations built so far (at most the three media with and without the
+    /// shadow-map light): the noise model's at creation, the others at the first frame whose
+    /// settings ask for them (a settings change, never per frame).
     variants: Vec<(MarchVariant, wgpu::ComputePipeline)>,
     /// Bind groups by the views they bind; `uniforms` is the renderer's one buffer.
     pub binds: BindCache,
@@ -443,7 +440,7 @@ impl MarchPipeline {
         );
         let mut pipeline = Self {
             parts,
-            variants: Vec::with_capacity(MAX_VARIANTS),
+            variants: Vec::new(),
             binds: BindCache::default(),
         };
         pipeline.variant(
