@@ -265,13 +265,17 @@ fn cancel_holds_the_sky_as_it_is_and_drops_what_was_scheduled() {
         .count();
     let level = mid.iter().map(|p| p[0]).sum::<f32>() / mid.len() as f32;
     println!("mean change {mean} on a mean of {level}, {moved} pixels moved");
-    // Relative to the picture's own level (0.64% with the delta-Eddington model).
+    // Relative to the picture's own level (0.64% with the delta-Eddington model; 0.40% with
+    // the detail erosion in every light sample).
     assert!(
         mean < 0.01 * level,
         "mean change {mean} on a mean of {level}"
     );
+    // At most 2% of the pixels by more than 0.02: since the light march reads the detail
+    // erosion at every distance, the 8-bit map's edge shifts also move the shading of the edge
+    // pixels behind them in the sun's direction (1.3% of the pixels here, 2026-12-04).
     assert!(
-        moved * 100 < mid.len(),
+        moved * 50 < mid.len(),
         "{moved} of {} pixels moved",
         mid.len()
     );
