@@ -9,10 +9,9 @@ use nimbus::settings::Quality;
 use nimbus::{Headless, Weather};
 
 /// Measures and returns the section (markdown); also printed.
-pub fn weather_section(quick: bool) -> Result<String, String> {
+pub fn weather_section(bake_size: (u32, u32)) -> Result<String, String> {
     // A weather request against settled frames: the worst frame while its map is made a
     // slice per frame (the default budget), and the whole map made at once (budget 0).
-    let bake_size = if quick { (320, 180) } else { (1280, 720) };
     let mut h = super::new_headless(bake_size)?;
     let settings = super::settings_for(&Weather::cloudy(), super::Variant::Level(Quality::Medium));
     let view = &standard_views()[0];

@@ -27,7 +27,7 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
     let ndc = pixel_ndc(gp, grid);
     let cam = u.camera.xyz;
     let near_p = unproject(ndc, u.camera.w);
-    let dir = normalize(near_p.xyz / near_p.w - cam);
+    let dir = normalize(near_p.xyz / near_p.w);
 
     // At reduced resolution a traced pixel stands for a block of scene pixels: it reads the
     // scene depth at the block's center; the composite's upsample handles the edges.
@@ -37,7 +37,7 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
         let scale = u32(u.tangent_z.w);
         let full = vec2u(u.viewport.zw);
         let at = min(gp * scale + vec2u(scale / 2u), full - vec2u(1u));
-        scene_t = scene_distance_at(u.inv_view_proj, cam, u.sun_color.w, ndc, load_scene_depth(at));
+        scene_t = scene_distance_at(u.inv_view_proj_rel, u.sun_color.w, ndc, load_scene_depth(at));
         max_t = min(max_t, scene_t);
     }
 

@@ -164,7 +164,7 @@ fn trace(@builtin(global_invocation_id) id: vec3u) {
     }
     let cam = u.camera.xyz;
     let near_p = unproject(pixel_ndc(id.xy, size), u.camera.w);
-    let view_dir = normalize(near_p.xyz / near_p.w - cam);
+    let view_dir = normalize(near_p.xyz / near_p.w);
     let m = majorant();
     let model = u32(u.misc.y);
     let sun = u.sun.xyz;

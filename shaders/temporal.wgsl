@@ -15,7 +15,7 @@
 //   fast motion and moving occluders do not smear (neighbourhood clamping, Karis 2014).
 
 struct TemporalUniforms {
-    inv_view_proj: mat4x4f,
+    inv_view_proj_rel: mat4x4f, // NDC to positions relative to the camera
     prev_view_proj: mat4x4f,
     camera: vec4f,   // xyz position, w: depth value of the near plane
     grid: vec4f,     // grid width, height, block edge k, trace divisor (output px per grid px)
@@ -56,7 +56,7 @@ fn scene_distance_of(p: vec2u, grid: vec2u, ndc: vec2f) -> f32 {
     let scale = u32(tu.grid.w);
     let full = vec2u(tu.viewport.zw);
     let at = min(p * scale + vec2u(scale / 2u), full - vec2u(1u));
-    return scene_distance_at(tu.inv_view_proj, tu.camera.xyz, tu.misc.y, ndc, load_scene_depth(at));
+    return scene_distance_at(tu.inv_view_proj_rel, tu.misc.y, ndc, load_scene_depth(at));
 }
 
 // The fresh samples around a grid pixel: their depth-aware bilinear blend, the range they span
@@ -169,8 +169,8 @@ fn resolve(@builtin(global_invocation_id) id: vec3u) {
     let offset = vec2u(tu.pattern.xy);
     let ndc = pixel_ndc(p, grid);
     let cam = tu.camera.xyz;
-    let near_p = tu.inv_view_proj * vec4f(ndc, tu.camera.w, 1.0);
-    let dir = normalize(near_p.xyz / near_p.w - cam);
+    let near_p = tu.inv_view_proj_rel * vec4f(ndc, tu.camera.w, 1.0);
+    let dir = normalize(near_p.xyz / near_p.w);
     let scene_t = scene_distance_of(p, grid, ndc);
 
     let is_fresh = all(p % vec2u(k) == offset);

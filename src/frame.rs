@@ -90,7 +90,10 @@ pub struct FrameInputs {
 /// Camera quantities derived once per frame and used by both CPU mirror and shader.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct CameraDerived {
-    pub inv_view_proj: Mat4,
+    /// Inverse of view-projection × translation(camera): NDC to positions relative to the
+    /// camera, so that the shaders build ray directions and scene distances without
+    /// subtracting the camera position (f32 cancellation far from the world origin).
+    pub inv_view_proj_rel: Mat4,
     pub view_proj: Mat4,
     pub position: Vec3,
 }
@@ -180,7 +183,7 @@ impl Camera {
     pub(crate) fn derive(&self) -> Result<CameraDerived> {
         matrix_finite("camera.view", &self.view)?;
         matrix_finite("camera.projection", &self.projection)?;
-        let inv_view = invertible("camera.view", &self.view)?;
+        invertible("camera.view", &self.view)?;
         invertible("camera.projection", &self.projection)?;
         let projection = self.zero_one_projection();
         if projection.w_axis.w.abs() > 1e-6 || projection.z_axis.w.abs() < 1e-6 {
@@ -228,11 +231,19 @@ impl Camera {
             ));
         }
         let view_proj = projection * self.view;
-        let inv_view_proj = invertible("camera.view * camera.projection", &view_proj)?;
+        invertible("camera.view * camera.projection", &view_proj)?;
+        // In f64: the f32 view's translation is the camera position rotated and rounded, and
+        // composing it with translation(camera) must cancel to (nearly) zero, not to f32
+        // rounding noise of a 12 km position (about 1e-3 m, 1e-3 rad at a 1 m near plane).
+        let position = self.view.as_dmat4().inverse().w_axis.truncate();
+        let relative =
+            projection.as_dmat4() * self.view.as_dmat4() * glam::DMat4::from_translation(position);
+        let inv_view_proj_rel = relative.inverse().as_mat4();
+        matrix_finite("camera.view * camera.projection", &inv_view_proj_rel)?;
         Ok(CameraDerived {
-            inv_view_proj,
+            inv_view_proj_rel,
             view_proj,
-            position: inv_view.w_axis.truncate(),
+            position: position.as_vec3(),
         })
     }
 }
@@ -344,6 +355,34 @@ mod tests {
         }
     }
 
+    /// 12 km from the origin the rays must still point where f64 says they do: "near-plane
+    /// point minus camera position" in f32 was off by about 1e-3 rad there on the GPU (more
+    /// than a pixel at 1920x1080, and a still camera's history drifted); the camera-relative
+    /// inverse is exact to f32 rounding of the direction itself.
+    #[test]
+    fn ray_directions_stay_exact_far_from_the_origin() {
+        let eye = Vec3::new(300.0, 12_000.0, -200.0);
+        let target = Vec3::new(0.0, 6_000.0, -14_000.0);
+        let camera = Camera {
+            view: Mat4::look_at_rh(eye, target, Vec3::Y),
+            projection: Mat4::perspective_rh(1.0, 16.0 / 9.0, N, F),
+            depth: DepthConvention::default(),
+        };
+        let d = camera.derive().unwrap();
+        assert!((d.position - eye).length() < 2e-3, "{}", d.position);
+        let inv64 = (camera.projection.as_dmat4() * camera.view.as_dmat4()).inverse();
+        let eye64 = camera.view.as_dmat4().inverse().w_axis.truncate();
+        let mut worst = 0.0f64;
+        for (x, y) in [(0.0, 0.0), (0.9, 0.7), (-0.8, -0.95), (0.33, -0.4)] {
+            let p = d.inv_view_proj_rel * Vec4::new(x, y, 0.0, 1.0);
+            let dir = (p.truncate() / p.w).normalize().as_dvec3();
+            let q = inv64 * glam::DVec4::new(x as f64, y as f64, 0.0, 1.0);
+            let exact = (q.truncate() / q.w - eye64).normalize();
+            worst = worst.max(dir.angle_between(exact));
+        }
+        assert!(worst < 1e-6, "{worst}");
+    }
+
     #[test]
     fn gl_clip_z_projection_reads_as_its_zero_one_twin() {
         let fov = 1.1;
@@ -369,11 +408,13 @@ mod tests {
         };
         let (a, b) = (flagged.derive().unwrap(), plain.derive().unwrap());
         let scale = b
-            .inv_view_proj
+            .inv_view_proj_rel
             .to_cols_array()
             .iter()
             .fold(0.0f32, |m, v| m.max(v.abs()));
-        assert!(a.inv_view_proj.abs_diff_eq(b.inv_view_proj, 1e-3 * scale));
+        assert!(a
+            .inv_view_proj_rel
+            .abs_diff_eq(b.inv_view_proj_rel, 1e-3 * scale));
         // The window depth OpenGL writes for a point 100 m away linearises back to 100 m.
         let c = gl * Vec4::new(0.0, 0.0, -100.0, 1.0);
         let window_depth = (c.z / c.w + 1.0) * 0.5;

@@ -818,7 +818,7 @@ impl Renderer {
         self.last_time = frame.time;
         let march = MarchUniforms::new(&self.settings, &sample, frame, &camera, sun_dir, false);
         let composite = CompositeUniforms::new(
-            camera.inv_view_proj,
+            camera.inv_view_proj_rel,
             camera.position,
             frame.camera.depth.far_value(),
             self.settings.march.resolution.divisor(),
@@ -828,7 +828,7 @@ impl Renderer {
             march,
             composite,
             view_proj: camera.view_proj,
-            inv_view_proj: camera.inv_view_proj,
+            inv_view_proj_rel: camera.inv_view_proj_rel,
             camera: camera.position,
             near_value: frame.camera.depth.near_value(),
             far_value: frame.camera.depth.far_value(),
@@ -963,7 +963,7 @@ impl Renderer {
                 let previous = &sized.history[state.history.current];
                 let next = &sized.history[1 - state.history.current];
                 let frame = ResolveFrame {
-                    inv_view_proj: pending.inv_view_proj,
+                    inv_view_proj_rel: pending.inv_view_proj_rel,
                     prev_view_proj: state.history.view_proj,
                     camera: pending.camera,
                     near_value: pending.near_value,

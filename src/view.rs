@@ -72,7 +72,7 @@ pub(crate) struct Pending {
     pub march: MarchUniforms,
     pub composite: CompositeUniforms,
     pub view_proj: glam::Mat4,
-    pub inv_view_proj: glam::Mat4,
+    pub inv_view_proj_rel: glam::Mat4,
     pub camera: glam::Vec3,
     pub near_value: f32,
     pub far_value: f32,

@@ -49,9 +49,25 @@ fn full_march(view: &DemoView) -> Vec<[f32; 4]> {
     h.read_clouds().unwrap()
 }
 
+/// The ground view, and a view from 12 km above the layer (the fidelity benchmark's): far
+/// from the world origin, a ray direction built as "near-plane point minus camera" lost about
+/// 1e-3 rad to f32 cancellation, the still camera's reprojection missed its own pixel by more
+/// than the snap tolerance, and every frame's bilinear history read blurred the image.
+fn still_views() -> [DemoView; 2] {
+    let mut above = standard_views()[3];
+    above.eye.y = 12_000.0;
+    above.target = Vec3::new(0.0, 6_000.0, -14_000.0);
+    [standard_views()[0], above]
+}
+
 #[test]
 fn a_static_view_settles_to_the_full_march() {
-    let view = standard_views()[0];
+    for (v, view) in still_views().iter().enumerate() {
+        settles_to_the_full_march(v, *view);
+    }
+}
+
+fn settles_to_the_full_march(v: usize, view: DemoView) {
     let full = full_march(&view);
     for pattern in [TracePattern::OneIn4, TracePattern::OneIn16] {
         let block = pattern.block();
@@ -62,7 +78,10 @@ fn a_static_view_settles_to_the_full_march() {
         for y in (0..H).step_by(block as usize) {
             for x in (0..W).step_by(block as usize) {
                 let i = (y * W + x) as usize;
-                assert_eq!(first[i], full[i], "{pattern:?}: traced pixel ({x}, {y})");
+                assert_eq!(
+                    first[i], full[i],
+                    "view {v}, {pattern:?}: traced pixel ({x}, {y})"
+                );
             }
         }
         // The others are interpolated, so frame 0 is close but not equal.
@@ -76,17 +95,16 @@ fn a_static_view_settles_to_the_full_march() {
         let worst = worst_difference(&full, &settled);
         assert!(
             worst < 2e-3,
-            "{pattern:?}: settled image differs by {worst}"
+            "view {v}, {pattern:?}: settled image differs by {worst}"
         );
-        // And it stays there.
-        for _ in 0..3 {
+        // And it stays there (a history that drifts, blurs or leaks shows within a few
+        // passes over the block).
+        for _ in 0..3 * block * block {
             show(&mut h, &view, 0.0);
         }
         let later = h.read_clouds().unwrap();
-        assert!(
-            worst_difference(&full, &later) < 2e-3,
-            "{pattern:?}: drifted"
-        );
+        let drift = worst_difference(&full, &later);
+        assert!(drift < 2e-3, "view {v}, {pattern:?}: drifted by {drift}");
     }
 }
 

@@ -18,7 +18,7 @@ use crate::weather::WeatherSample;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub(crate) struct MarchUniforms {
-    inv_view_proj: [f32; 16],
+    inv_view_proj_rel: [f32; 16],
     camera: [f32; 4],
     planet: [f32; 4],
     sun: [f32; 4],
@@ -130,7 +130,7 @@ impl MarchUniforms {
         let depth = frame.camera.depth;
         let v4 = |v: Vec3, w: f32| v.extend(w).to_array();
         Self {
-            inv_view_proj: Mat4::to_cols_array(&cam.inv_view_proj),
+            inv_view_proj_rel: Mat4::to_cols_array(&cam.inv_view_proj_rel),
             camera: v4(cam.position, depth.near_value()),
             planet: v4(up, s.planet.radius),
             sun: v4(sun_dir, frame.sun.illuminance),

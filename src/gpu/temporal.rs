@@ -12,7 +12,7 @@ use super::shaders::DepthKind;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub(crate) struct TemporalUniforms {
-    inv_view_proj: [f32; 16],
+    inv_view_proj_rel: [f32; 16],
     prev_view_proj: [f32; 16],
     camera: [f32; 4],
     grid: [f32; 4],
@@ -23,7 +23,8 @@ pub(crate) struct TemporalUniforms {
 
 /// What the resolve of one frame needs to know.
 pub(crate) struct ResolveFrame {
-    pub inv_view_proj: Mat4,
+    /// NDC to positions relative to the camera (`CameraDerived::inv_view_proj_rel`).
+    pub inv_view_proj_rel: Mat4,
     /// The view-projection the history was rendered with; `None` when there is no usable
     /// history (first frame, reset, resize, new settings).
     pub prev_view_proj: Option<Mat4>,
@@ -45,7 +46,7 @@ impl TemporalUniforms {
     pub(crate) fn new(f: &ResolveFrame) -> Self {
         let flag = |b: bool| if b { 1.0 } else { 0.0 };
         Self {
-            inv_view_proj: f.inv_view_proj.to_cols_array(),
+            inv_view_proj_rel: f.inv_view_proj_rel.to_cols_array(),
             prev_view_proj: f.prev_view_proj.unwrap_or(Mat4::IDENTITY).to_cols_array(),
             camera: f.camera.extend(f.near_value).to_array(),
             grid: [
