@@ -21,7 +21,7 @@ fn cost(h: &mut nimbus::Headless, settings: Settings) -> Result<Cost, String> {
         m.stats.mean_samples,
         m.stats.mean_light_samples,
         [
-            m.march_ms - m.shadow_ms - m.ambient_ms,
+            m.march_ms,
             m.shadow_ms,
             m.ambient_ms,
             m.resolve_ms,

@@ -6,7 +6,7 @@
 
 struct CompositeUniforms {
     inv_view_proj_rel: mat4x4f, // NDC to positions relative to the camera
-    camera: vec4f,   // xyz position, w: depth value meaning "far / sky"
+    depth: vec4f,    // x: depth value meaning "far / sky"
     params: vec4f,   // x: trace divisor (1, 2, 4), y: has scene depth (0/1)
     viewport: vec4f, // the rectangle of the targets rendered: x, y, width, height (px)
 }
@@ -40,7 +40,7 @@ fn full_scene_distance(pixel: vec2u) -> f32 {
         return NO_SCENE;
     }
     let dims = vec2u(cu.viewport.zw);
-    return scene_distance_at(cu.inv_view_proj_rel, cu.camera.w, pixel_ndc(pixel, dims), load_scene_depth(pixel));
+    return scene_distance_at(cu.inv_view_proj_rel, cu.depth.x, pixel_ndc(pixel, dims), load_scene_depth(pixel));
 }
 
 // (L, T) for a full-resolution pixel.

@@ -26,8 +26,7 @@ fn march(@builtin(global_invocation_id) id: vec3u) {
     light_samples = 0u;
     let ndc = pixel_ndc(gp, grid);
     let cam = u.camera.xyz;
-    let near_p = unproject(ndc, u.camera.w);
-    let dir = normalize(near_p.xyz / near_p.w);
+    let dir = view_ray_dir(u.inv_view_proj_rel, ndc, u.camera.w);
 
     // At reduced resolution a traced pixel stands for a block of scene pixels: it reads the
     // scene depth at the block's center; the composite's upsample handles the edges.

@@ -3,7 +3,7 @@
 // include this module bind 0-5 and 9 as below and keep 6-8 for their own outputs.
 
 struct MarchUniforms {
-    inv_view_proj_rel: mat4x4f, // NDC to positions relative to the camera (see unproject)
+    inv_view_proj_rel: mat4x4f, // NDC to positions relative to the camera (depth.wgsl)
     camera: vec4f,          // xyz position (m), w: depth value of the near plane
     planet: vec4f,          // xyz up, w: planet radius (m)
     sun: vec4f,             // xyz direction toward the sun, w: illuminance
@@ -74,14 +74,6 @@ fn debug_mode() -> u32 {
         return MEDIUM;
     }
     return u32(u.misc.z);
-}
-
-// The homogeneous offset from the camera of the point at (ndc, depth). Camera-relative (the
-// host inverts view-projection × translation(camera) in f64), so a ray direction is this
-// point's own direction: "near-plane point minus camera" in f32 lost about 1e-3 rad 12 km from
-// the world origin, and a still camera's reprojection missed its own pixel.
-fn unproject(ndc: vec2f, depth: f32) -> vec4f {
-    return u.inv_view_proj_rel * vec4f(ndc, depth, 1.0);
 }
 
 fn horizontal_of(p: vec3f) -> vec2f {

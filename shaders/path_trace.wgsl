@@ -163,8 +163,7 @@ fn trace(@builtin(global_invocation_id) id: vec3u) {
         return;
     }
     let cam = u.camera.xyz;
-    let near_p = unproject(pixel_ndc(id.xy, size), u.camera.w);
-    let view_dir = normalize(near_p.xyz / near_p.w);
+    let view_dir = view_ray_dir(u.inv_view_proj_rel, pixel_ndc(id.xy, size), u.camera.w);
     let m = majorant();
     let model = u32(u.misc.y);
     let sun = u.sun.xyz;

@@ -169,8 +169,7 @@ fn resolve(@builtin(global_invocation_id) id: vec3u) {
     let offset = vec2u(tu.pattern.xy);
     let ndc = pixel_ndc(p, grid);
     let cam = tu.camera.xyz;
-    let near_p = tu.inv_view_proj_rel * vec4f(ndc, tu.camera.w, 1.0);
-    let dir = normalize(near_p.xyz / near_p.w);
+    let dir = view_ray_dir(tu.inv_view_proj_rel, ndc, tu.camera.w);
     let scene_t = scene_distance_of(p, grid, ndc);
 
     let is_fresh = all(p % vec2u(k) == offset);

@@ -819,7 +819,6 @@ impl Renderer {
         let march = MarchUniforms::new(&self.settings, &sample, frame, &camera, sun_dir, false);
         let composite = CompositeUniforms::new(
             camera.inv_view_proj_rel,
-            camera.position,
             frame.camera.depth.far_value(),
             self.settings.march.resolution.divisor(),
             false,

@@ -16,7 +16,7 @@ use super::shaders::{pass_source, DepthKind};
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub(crate) struct CompositeUniforms {
     inv_view_proj_rel: [f32; 16],
-    camera: [f32; 4],
+    depth: [f32; 4],
     params: [f32; 4],
     viewport: [f32; 4],
 }
@@ -24,14 +24,13 @@ pub(crate) struct CompositeUniforms {
 impl CompositeUniforms {
     pub(crate) fn new(
         inv_view_proj_rel: Mat4,
-        camera: glam::Vec3,
         far_value: f32,
         divisor: u32,
         has_depth: bool,
     ) -> Self {
         Self {
             inv_view_proj_rel: inv_view_proj_rel.to_cols_array(),
-            camera: camera.extend(far_value).to_array(),
+            depth: [far_value, 0.0, 0.0, 0.0],
             params: [divisor as f32, if has_depth { 1.0 } else { 0.0 }, 0.0, 0.0],
             viewport: [0.0; 4],
         }
