@@ -896,13 +896,17 @@ static void test_owned_context(void) {
 
 /* ---- contexts come and go on one device ---------------------------------------------------- */
 /* `cycles` create / render one frame / destroy cycles on `dev` (ext: its description, images
- * its own). RSS is printed at cycles 5 and 20; with `judge`, growth beyond 8 MiB between them
- * fails. (The validation layer's own bookkeeping grows by about 0.5 MiB per context with sync
- * validation, Nimbus's RSS not at all, so RSS is judged on a device without the layer.) */
+ * its own). RSS is read after every cycle; with `judge`, growth beyond 8 MiB from the lowest
+ * reading of cycles 1-5 to the lowest of cycles 16-20 fails. The lowest of five, because the
+ * driver's worker threads now and then still hold ~30 MiB of heap for a moment after a context
+ * is gone (seen on llvmpipe under load: one cycle reads 160 MiB between neighbours at 133): a
+ * leak raises every later reading, a passing spike only one. (The validation layer's own
+ * bookkeeping grows by about 0.5 MiB per context with sync validation, Nimbus's RSS not at all,
+ * so RSS is judged on a device without the layer.) */
 static void lifetimes(VkSetup *dev, NimbusVulkanDeviceExt *ext, VksImage *c_img, VksImage *d_img, int cycles,
                       int judge, const char *label) {
     NimbusContextDesc desc = {0};
-    double rss5 = 0.0, rss20 = 0.0;
+    double early = 1e30, late = 1e30, rss;
     int i;
     desc.abi_version = NIMBUS_ABI_VERSION;
     desc.next = &ext->chain;
@@ -926,18 +930,21 @@ static void lifetimes(VkSetup *dev, NimbusVulkanDeviceExt *ext, VksImage *c_img,
             failures++;
         }
         nimbus_context_destroy(c); /* releases the images, waits for its work */
-        if (i == 5) rss5 = vks_rss_mib();
-        if (i == 20) rss20 = vks_rss_mib();
-        if (i == 5 || i == 20) printf("     %s: context cycle %d: RSS %.1f MiB\n", label, i, i == 5 ? rss5 : rss20);
+        rss = vks_rss_mib();
+        if (i <= 5 && rss < early) early = rss;
+        if (i >= 16 && i <= 20 && rss < late) late = rss;
+        if (i == 5 || i == 20) printf("     %s: context cycle %d: RSS %.1f MiB\n", label, i, rss);
     }
     (void)dev;
     if (judge && cycles >= 20) {
         checks++;
-        if (rss20 - rss5 > 8.0) {
-            printf("FAIL: %s: RSS grew by %.1f MiB from cycle 5 to 20\n", label, rss20 - rss5);
+        if (late - early > 8.0) {
+            printf("FAIL: %s: RSS grew by %.1f MiB from cycles 1-5 to 16-20 (lowest of each: %.1f, %.1f)\n",
+                   label, late - early, early, late);
             failures++;
         } else {
-            printf("ok   %s: RSS grew by %.1f MiB from cycle 5 to 20 (at most 8)\n", label, rss20 - rss5);
+            printf("ok   %s: RSS grew by %.1f MiB from cycles 1-5 to 16-20 (lowest of each; at most 8)\n", label,
+                   late - early);
         }
     }
 }
