@@ -799,7 +799,9 @@ fn main() -> Result<(), String> {
              The noise-model views are judged on the layer column, with the march's noise LOD\n\
              off: at 64×36 a pixel's footprint is 20 times a 1280×720 frame's, and the coarse mips\n\
              showed the march a thinner medium than the path tracer's mip 0. The column below a\n\
-             sample is taken as dense as the sample. Their FLIP is not the reconstruction's: the\n\
+             sample is probed (`column_below`): the full density 0.35 of the way down to the\n\
+             layer's base, so a tower's top stands on its body and a wisp on its side on little.\n\
+             Their FLIP is not the reconstruction's: the\n\
              unoptimised march (`--quality ultra`, every pixel every frame, no early exit) scored as\n\
              far from the reference as the default level (0.254 / 0.223 / 0.253 at 256 samples,\n\
              with an older column); the floor column is the reference's own noise.\n\n\
@@ -818,6 +820,22 @@ fn main() -> Result<(), String> {
              3×3 median) moves FLIP only to 0.206 (the floor to 0.055): the rest is the model's.\n\
              Pixel by pixel, each cloud is too bright on one side and too dark on the other by 15-40%:\n\
              the path tracer carries light across a cloud, the independent column does not.\n\
+             Two changes since (2026-12-04 evening, same 2048-sample references). The ambient is\n\
+             shared between the sky above (`ambient_top`) and below (`ambient_bottom`) as\n\
+             Eddington's diffusion solution shares it in the sample's column\n\
+             (`column_ambient_share`: one half in a thin wisp, the depth's fraction in a thick\n\
+             cloud; within 0.002 of the exact isotropic slab from τ = 5 on, 0.033 at τ = 0.2)\n\
+             instead of by the sample's height in the layer, which gave a thick cloud's base almost\n\
+             none of the sky: sparse from the ground FLIP 0.209 -> 0.189, opaque parts 0.85 -> 0.92,\n\
+             but from above the partly transparent parts rose from 1.41 to 1.60 and FLIP to 0.122.\n\
+             Those parts stood on the column \"as dense as the sample\" down to the layer's base;\n\
+             probed, they stand on what is below them. Both together: from the ground 0.186\n\
+             (by transmittance 0.85 / 0.99 / 1.08 in the opaque, 0.02-0.2 and 0.2-0.5 bands),\n\
+             overcast 0.186, from above 0.111 (1.03 / 1.14 / 1.28), for one density call more per\n\
+             view sample (+15% of a default frame on llvmpipe, docs/performance.md). In the order\n\
+             ground / overcast / above: probes at 0.25 and 0.6 together 0.186 / 0.188 / 0.108 for\n\
+             another call; those two without the ambient's share 0.213 / 0.180 / 0.106; a probe of the base shape (no detail\n\
+             erosion, a cheaper fetch) made thin parts brighter still (1.72 from above).\n\
              Overcast from the ground scores at the reference's own floor (0.188 against 0.189 at\n\
              2048 samples; 0.144 against 0.142 at 8192): 32 times the samples (256 -> 8192) lowered\n\
              that floor only from 0.239 to 0.142, so the march's own error there is below what these\n\

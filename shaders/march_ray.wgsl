@@ -130,15 +130,24 @@ fn sun_optical_depth(p: vec3f, n: u32, footprint: f32) -> f32 {
 }
 
 // Optical depth straight down from p (density sigma_t there) to the bottom of a layer, for
-// the independent-column diffuse model: exact for the debug slab; for the noise model the
-// column below is taken as dense as the sample, down to the layer's base (the independent
-// column's own assumption). Taking it as dense as the cloud's body (the base shape before the
-// detail erosion) made broken cumulus 1.34 times the path tracer from above and 1.19 from the
-// ground; as dense as the sample, 0.98 and 1.13 (docs/fidelity.md, 2026-12-03). That choice
-// had been made against references the noise LOD distorted at the fidelity images' size.
-fn column_below(p: vec3f, sigma_t: f32) -> f32 {
-    let floor = select(u.layer.x, u.debug.x, debug_mode() == DEBUG_SLAB);
-    return max(altitude(p, u.planet.xyz, u.planet.w) - floor, 0.0) * sigma_t;
+// the independent-column diffuse model: exact for the debug slab. For the noise model the
+// density below is probed once, 0.35 of the way down to the layer's base (the full density,
+// detail included): the top of a tower stands on its body, a wisp on a tower's side or a thin
+// cloud's top on little or nothing. Before (2026-12-04) the column was taken as dense as the
+// sample all the way down, which stood every thin part on a thick column: from 12 km above
+// the partly transparent parts (reference transmittance 0.2-0.5) came out 1.41 times the path
+// tracer, 1.60 once the ambient took the column's share (column_ambient_share). With both,
+// against the 2048-sample references (docs/fidelity.md): sparse from the ground FLIP 0.209 ->
+// 0.186, overcast 0.188 -> 0.186, sparse from above 0.111 -> 0.111. A probe at 0.25 gave
+// 0.184 / 0.188 / 0.114, at 0.45 0.189 / 0.182 / 0.110, two (0.25 and 0.6) 0.186 / 0.188 /
+// 0.108 for another density call per view sample.
+fn column_below(p: vec3f, local_up: vec3f, sigma_t: f32, footprint: f32) -> f32 {
+    let h = altitude(p, u.planet.xyz, u.planet.w);
+    if (debug_mode() == DEBUG_SLAB) {
+        return max(h - u.debug.x, 0.0) * sigma_t;
+    }
+    let depth = max(h - u.layer.x, 0.0);
+    return depth * sample_density(p - local_up * (0.35 * depth), false, footprint) * u.shape.z;
 }
 
 // Optical distance (m) from p inside the debug sphere to its surface along d.
@@ -167,7 +176,10 @@ fn sphere_exit(p: vec3f, d: vec3f) -> f32 {
 //   leak (the transverse buckling in src/lighting/diffusion.rs). A vertical column through a
 //   sphere keeps light that leaks out of its sides (1.55x the path tracer back-lit) and lights a
 //   side-lit sphere only through DE_MIN_MU0 (0.36x).
-fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, sigma_t: f32, tau_view: f32, cos_theta: f32) -> f32 {
+//
+// Returns (the source, the share of the sky above in the column's ambient: see
+// column_ambient_share).
+fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, sigma_t: f32, tau_view: f32, cos_theta: f32, footprint: f32) -> vec2f {
     let albedo = u.shape.w;
     let g = u.ms_model.y;
     let phase = peak_phase(u32(u.misc.y), u.phase, cos_theta, tau_sun, albedo, g, u.ms_model.z);
@@ -189,12 +201,12 @@ fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, sigma_t: f32, tau_view: f32,
         if (w_out < 1.0) {
             light += (1.0 - w_out) * delta_eddington_source(tau_sun, min(inward, tau_sun), outward, max(-c, DE_MIN_MU0), -mu_view, cos_theta, albedo, g, phase, across);
         }
-        return light;
+        return vec2f(light, 0.5);
     }
     let local_up = normalize(p + u.planet.xyz * u.planet.w);
     let mu0 = max(dot(u.sun.xyz, local_up), DE_MIN_MU0);
     let mu_view = dot(dir, local_up);
-    let column = column_below(p, sigma_t);
+    let column = column_below(p, local_up, sigma_t, footprint);
     // Looking up, the view ray's own optical depth since it entered the cloud, projected on the
     // vertical, is the column below as the ray measured it. Blended in over the first 15° above
     // the horizon (no seam at the horizon).
@@ -205,7 +217,8 @@ fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, sigma_t: f32, tau_view: f32,
     // farther than the ray's own optical depth (for a slab, never closer than the column: no
     // change).
     below = mix(below, min(below, tau_view), smoothstep(0.0, 0.5, cos_theta));
-    return delta_eddington_source(tau_sun, tau_sun * mu0, below, mu0, mu_view, cos_theta, albedo, g, phase, 1e30);
+    let light = delta_eddington_source(tau_sun, tau_sun * mu0, below, mu0, mu_view, cos_theta, albedo, g, phase, 1e30);
+    return vec2f(light, column_ambient_share(tau_sun * mu0, below, g));
 }
 
 // One view ray from `cam` along `dir` up to `max_t` (m): the in-scattered radiance, the
@@ -331,10 +344,15 @@ fn march_ray(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32) 
                 b_i *= u.ms.z;
             }
             let sample_tau_view = tau_view + 0.5 * sigma_t * dt;
+            // The ambient's share of the sky above: the height in the layer (Schneider's
+            // gradient) with the octaves and in the debug media; the column's diffusion share
+            // (column_ambient_share) with delta-Eddington in the noise model.
+            var hf = clamp((altitude(p, up, radius) - u.layer.x) / thickness, 0.0, 1.0);
             if (delta_eddington_on) {
-                ms += column_light(p, dir, tau, sigma_t, sample_tau_view, cos_theta);
+                let column = column_light(p, dir, tau, sigma_t, sample_tau_view, cos_theta, footprint);
+                ms += column.x;
+                hf = select(hf, column.y, debug_mode() == DEBUG_OFF);
             }
-            let hf = clamp((altitude(p, up, radius) - u.layer.x) / thickness, 0.0, 1.0);
             let ambient = mix(u.ambient_bottom.rgb, u.ambient_top.rgb, hf);
             let source = u.shape.w * sigma_t * (sun_radiance * ms + ambient);
             // Hillaire 2016 energy-conserving integration over the step.

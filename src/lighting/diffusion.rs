@@ -236,6 +236,20 @@ pub fn delta_eddington_source(c: &ColumnSample, albedo: f32, g: f32, phase_peak:
     (peak + lobe + (p1 - lobe) * thick).max(0.0)
 }
 
+/// The share of the sky above (`ambient_top`) in the ambient light inside a column with
+/// optical depths `above` and `below`, lit by diffuse light from above (`ambient_top`) and
+/// below (`ambient_bottom`). In a conservative column Eddington's equations without a sun,
+/// dI1/dτ' = 0 and dI0/dτ' = -(1 - g') I1, make I0 linear in the transport optical depth
+/// (1 - g') τ' = (1 - g) τ, and Marshak's conditions I0 ± 2/3 I1 = L at the faces extrapolate
+/// it 2/3 beyond each: I0 = L_bottom + s (L_top - L_bottom) with
+/// s = ((1 - g) below + 2/3) / ((1 - g)(above + below) + 4/3). One half in a thin wisp, the
+/// height within the column deep in a thick one. `shaders/diffusion.wgsl`'s
+/// `column_ambient_share` mirrors it; the march weighs the two ambient colours by it.
+pub fn column_ambient_share(above: f32, below: f32, g: f32) -> f32 {
+    let transport = 1.0 - g.clamp(0.0, 0.999);
+    (transport * below + 2.0 / 3.0) / (transport * (above + below) + 4.0 / 3.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -455,5 +469,118 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// E_n(x), the exponential integrals (n = 1 by Numerical Recipes' series / continued
+    /// fraction, the others by recurrence), in f64.
+    fn expint(n: u32, x: f64) -> f64 {
+        let e1 = if x <= 1.0 {
+            let mut sum = -0.577_215_664_901_532_9 - x.ln();
+            let (mut term, mut k) = (1.0f64, 1.0f64);
+            loop {
+                term *= -x / k;
+                let add = -term / k;
+                sum += add;
+                if add.abs() < 1e-16 * sum.abs() {
+                    break sum;
+                }
+                k += 1.0;
+            }
+        } else {
+            // Lentz's continued fraction.
+            let (mut b, mut c, mut d) = (x + 1.0, 1e300, 1.0 / (x + 1.0));
+            let mut h = d;
+            for i in 1..200 {
+                let an = -(i as f64) * (i as f64);
+                b += 2.0;
+                d = 1.0 / (an * d + b);
+                c = b + an / c;
+                let del = c * d;
+                h *= del;
+                if (del - 1.0).abs() < 1e-15 {
+                    break;
+                }
+            }
+            h * (-x).exp()
+        };
+        let mut e = e1;
+        for k in 1..n {
+            e = ((-x).exp() - x * e) / k as f64;
+        }
+        e
+    }
+
+    #[test]
+    // A dense linear solve reads clearest with its row and column indices.
+    #[allow(clippy::needless_range_loop)]
+    fn ambient_share_matches_the_exact_isotropic_slab() {
+        // The oracle: the exact transfer equation of a conservative, isotropically scattering
+        // slab (g = 0) lit from above by isotropic radiance 1 and from below by none, solved on
+        // N cells: the mean intensity J = Λ[J] + J_incident, with the Λ operator's kernel
+        // E1(|τ - t|) / 2 integrated over each cell (E2 differences) and J_incident = E2(τ) / 2.
+        for tau in [0.2f64, 1.0, 5.0, 20.0] {
+            let n = 240usize;
+            let h = tau / n as f64;
+            let centre = |i: usize| (i as f64 + 0.5) * h;
+            let mut m = vec![vec![0.0f64; n + 1]; n];
+            for i in 0..n {
+                let x = centre(i);
+                for j in 0..n {
+                    let (a, b) = (j as f64 * h, (j + 1) as f64 * h);
+                    let k = if i == j {
+                        0.5 * ((1.0 - expint(2, x - a)) + (1.0 - expint(2, b - x)))
+                    } else {
+                        0.5 * (expint(2, (x - a).abs()) - expint(2, (x - b).abs())).abs()
+                    };
+                    m[i][j] = if i == j { 1.0 - k } else { -k };
+                }
+                m[i][n] = 0.5 * expint(2, x);
+            }
+            // Gaussian elimination (the matrix is diagonally dominant: no pivoting needed).
+            for c in 0..n {
+                for r in c + 1..n {
+                    let f = m[r][c] / m[c][c];
+                    for k in c..=n {
+                        m[r][k] -= f * m[c][k];
+                    }
+                }
+            }
+            let mut j = vec![0.0f64; n];
+            for r in (0..n).rev() {
+                let s: f64 = (r + 1..n).map(|k| m[r][k] * j[k]).sum();
+                j[r] = (m[r][n] - s) / m[r][r];
+            }
+            for frac in [0.1f64, 0.3, 0.5, 0.7, 0.9] {
+                let i = ((frac * n as f64) as usize).min(n - 1);
+                let above = centre(i);
+                let share = column_ambient_share(above as f32, (tau - above) as f32, 0.0);
+                // Measured: within 0.033 near the faces of thin slabs (Eddington's P1 field is
+                // too smooth for the light grazing in there), within 0.002 from τ = 5 on.
+                let tolerance = if tau >= 5.0 { 0.005 } else { 0.04 };
+                assert!(
+                    (share as f64 - j[i]).abs() < tolerance,
+                    "τ {tau} at {frac}: Eddington {share} vs exact {}",
+                    j[i]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn ambient_share_limits() {
+        // A thin wisp sees each side alike; the faces of a thick column see their own side.
+        assert!((column_ambient_share(0.0, 0.0, 0.8) - 0.5).abs() < 1e-6);
+        assert!(column_ambient_share(0.0, 1000.0, 0.8) > 0.99);
+        assert!(column_ambient_share(1000.0, 0.0, 0.8) < 0.01);
+        assert!((column_ambient_share(7.0, 7.0, 0.5) - 0.5).abs() < 1e-6);
+        // Forward scattering makes a column thinner in transport depth: nearer one half.
+        let (forward, isotropic) = (
+            column_ambient_share(10.0, 30.0, 0.8),
+            column_ambient_share(10.0, 30.0, 0.0),
+        );
+        assert!(
+            0.5 < forward && forward < isotropic,
+            "{forward} {isotropic}"
+        );
     }
 }
