@@ -831,7 +831,7 @@ fn main() -> Result<(), String> {
              Those parts stood on the column \"as dense as the sample\" down to the layer's base;\n\
              probed, they stand on what is below them. Both together: from the ground 0.186\n\
              (by transmittance 0.85 / 0.99 / 1.08 in the opaque, 0.02-0.2 and 0.2-0.5 bands),\n\
-             overcast 0.186, from above 0.111 (1.03 / 1.14 / 1.28), for one density call more per\n\
+             overcast 0.187, from above 0.111 (1.03 / 1.14 / 1.28), for one density call more per\n\
              view sample (+15% of a default frame on llvmpipe, docs/performance.md). In the order\n\
              ground / overcast / above: probes at 0.25 and 0.6 together 0.186 / 0.188 / 0.108 for\n\
              another call; those two without the ambient's share 0.213 / 0.180 / 0.106; a probe of the base shape (no detail\n\

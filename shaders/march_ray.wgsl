@@ -138,7 +138,7 @@ fn sun_optical_depth(p: vec3f, n: u32, footprint: f32) -> f32 {
 // the partly transparent parts (reference transmittance 0.2-0.5) came out 1.41 times the path
 // tracer, 1.60 once the ambient took the column's share (column_ambient_share). With both,
 // against the 2048-sample references (docs/fidelity.md): sparse from the ground FLIP 0.209 ->
-// 0.186, overcast 0.188 -> 0.186, sparse from above 0.111 -> 0.111. A probe at 0.25 gave
+// 0.186, overcast 0.188 -> 0.187, sparse from above 0.111 -> 0.111. A probe at 0.25 gave
 // 0.184 / 0.188 / 0.114, at 0.45 0.189 / 0.182 / 0.110, two (0.25 and 0.6) 0.186 / 0.188 /
 // 0.108 for another density call per view sample.
 fn column_below(p: vec3f, local_up: vec3f, sigma_t: f32, footprint: f32) -> f32 {
@@ -212,13 +212,20 @@ fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, sigma_t: f32, tau_view: f32,
     // the horizon (no seam at the horizon).
     let seen = min(column, tau_view * max(mu_view, 0.0));
     var below = mix(column, seen, smoothstep(0.0, 0.25, mu_view));
+    // The ambient's share of the sky above (column_ambient_share) is the column's own, the same
+    // from every side: its bottom before the view-dependent bound below; its top the light
+    // march's depth projected on the vertical, but no more than the column as dense as the
+    // sample up to the layer's top (in the planet's shadow the light march returns 1e4, and
+    // under a low sun mu0 is clamped at DE_MIN_MU0 while the slant path keeps growing).
+    let top_column = max(u.layer.y - altitude(p, u.planet.xyz, u.planet.w), 0.0) * sigma_t;
+    let ambient_share = column_ambient_share(min(tau_sun * mu0, top_column), below, g);
     // Looking toward the sun, the camera sees the cloud's dark side: light escapes there through
     // the boundary the view ray came in by, however the cloud is shaped, so that boundary is no
     // farther than the ray's own optical depth (for a slab, never closer than the column: no
     // change).
     below = mix(below, min(below, tau_view), smoothstep(0.0, 0.5, cos_theta));
     let light = delta_eddington_source(tau_sun, tau_sun * mu0, below, mu0, mu_view, cos_theta, albedo, g, phase, 1e30);
-    return vec2f(light, column_ambient_share(tau_sun * mu0, below, g));
+    return vec2f(light, ambient_share);
 }
 
 // One view ray from `cam` along `dir` up to `max_t` (m): the in-scattered radiance, the

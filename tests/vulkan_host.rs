@@ -1,7 +1,7 @@
 //! The host-Vulkan-device path from C, under the Khronos validation layer with synchronisation
 //! validation (any validation message fails): builds examples-c/vulkan_host.c and
 //! tests/c/vulkan_test.c, runs the host with several entry / exit layout pairs, timeline
-//! semaphores, the queue lock and 20 context lifetimes on one device, compares its picture
+//! semaphores, the queue lock and 24 context lifetimes on one device, compares its picture
 //! with the owned-device render of the same frames (FLIP), and runs the bad-input matrix.
 
 mod common;
