@@ -1111,6 +1111,62 @@ fn the_dual_lobe_phase_model_renders_and_changes_the_light() {
     );
 }
 
+/// Clouds in the planet's shadow (the sun 10° below the horizon) keep their sky light. The
+/// ambient is shared between `ambient_top` and `ambient_bottom` by the sample's column; the
+/// column's top is the light march's depth projected on the vertical, which the planet's
+/// shadow makes 1e4: unbounded, the share fell to 0 and the clouds lost the sky above. With
+/// the sun's light off, the clouds' ambient light may not depend much on where the sun is:
+/// measured 0.57 times the sunlit-sky value in the shadow (the column's top is then the bound,
+/// the column as dense as the sample up to the layer's top), 0.0045 times before the bound.
+#[test]
+fn clouds_in_the_planets_shadow_keep_their_sky_light() {
+    let render = |elevation_deg: f32| {
+        let mut s = quiet(small_noise(1));
+        s.weather.ambient_top = Vec3::splat(0.5);
+        s.weather.ambient_bottom = Vec3::ZERO;
+        s.haze.fade_distance = f32::INFINITY;
+        let mut h = headless(s);
+        let eye = Vec3::new(0.0, 2.0, 0.0);
+        let view = Mat4::look_at_rh(eye, eye + Vec3::new(0.0, 1.0, 0.6), Vec3::Z);
+        let projection = Mat4::perspective_rh(70f32.to_radians(), W as f32 / H as f32, 1.0, 1e6);
+        let e = elevation_deg.to_radians();
+        let frame = FrameInputs {
+            camera: Camera {
+                view,
+                projection,
+                depth: DepthConvention::default(),
+            },
+            sun: Sun {
+                direction: Vec3::new(e.cos(), e.sin(), 0.0),
+                color: Vec3::ONE,
+                illuminance: 0.0,
+            },
+            time: 0.0,
+        };
+        h.upload_scene(&vec![[0.0; 4]; (W * H) as usize], None)
+            .unwrap();
+        h.render(&frame).unwrap();
+        let clouds = h.read_clouds().unwrap();
+        // Radiance per unit opacity over the cloudy pixels.
+        let (l, a) = clouds
+            .iter()
+            .filter(|c| c[3] < 0.5)
+            .fold((0.0f32, 0.0f32), |(l, a), c| (l + c[1], a + 1.0 - c[3]));
+        assert!(a > 10.0, "the view shows clouds (opacity {a})");
+        l / a
+    };
+    let sunlit_sky = render(30.0);
+    let shadowed = render(-10.0);
+    assert!(
+        sunlit_sky > 0.05,
+        "ambient light of the clouds: {sunlit_sky}"
+    );
+    assert!(
+        shadowed > 0.3 * sunlit_sky,
+        "in the planet's shadow {shadowed}, under a sunlit sky {sunlit_sky}"
+    );
+}
+
 // ---- reduced-resolution tracing ----------------------------------------------------------------
 
 #[test]
