@@ -23,6 +23,24 @@ fn render_view(h: &mut Headless, view: &DemoView) -> (Vec<[f32; 4]>, Vec<[f32; 4
 
 // ---- noise ---------------------------------------------------------------------------------
 
+/// A frame from `view` and `projection` (the default depth convention) under a white sun of
+/// `illuminance` toward `sun_direction`, at time 0.
+fn still_frame(view: Mat4, projection: Mat4, sun_direction: Vec3, illuminance: f32) -> FrameInputs {
+    FrameInputs {
+        camera: Camera {
+            view,
+            projection,
+            depth: DepthConvention::default(),
+        },
+        sun: Sun {
+            direction: sun_direction,
+            color: Vec3::ONE,
+            illuminance,
+        },
+        time: 0.0,
+    }
+}
+
 fn at(v: &[u8], n: usize, x: usize, y: usize, z: usize, c: usize) -> f64 {
     v[((z * n + y) * n + x) * 4 + c] as f64
 }
@@ -411,20 +429,7 @@ fn slab_closed_form(radius: f32) {
     let view = Mat4::look_at_rh(eye, eye + Vec3::Y, Vec3::Z);
     let projection = Mat4::perspective_rh(25f32.to_radians(), W as f32 / H as f32, 1.0, 1e5);
     let sun_dir = Vec3::new(0.3, 0.85, 0.2).normalize();
-    let sun = Sun {
-        direction: sun_dir,
-        color: Vec3::ONE,
-        illuminance: 10.0,
-    };
-    let frame = FrameInputs {
-        camera: Camera {
-            view,
-            projection,
-            depth: DepthConvention::default(),
-        },
-        sun,
-        time: 0.0,
-    };
+    let frame = still_frame(view, projection, sun_dir, 10.0);
     h.upload_scene(&vec![[0.0; 4]; (W * H) as usize], None)
         .unwrap();
     h.render(&frame).unwrap();
@@ -484,19 +489,7 @@ fn delta_eddington_in_the_march_matches_its_cpu_mirror() {
     let view = Mat4::look_at_rh(eye, eye + Vec3::new(0.3, 0.8, 0.2), Vec3::Y);
     let projection = Mat4::perspective_rh(40f32.to_radians(), W as f32 / H as f32, 1.0, 1e5);
     let sun_dir = Vec3::new(-0.4, 0.6, 0.1).normalize();
-    let frame = FrameInputs {
-        camera: Camera {
-            view,
-            projection,
-            depth: DepthConvention::default(),
-        },
-        sun: Sun {
-            direction: sun_dir,
-            color: Vec3::ONE,
-            illuminance: 10.0,
-        },
-        time: 0.0,
-    };
+    let frame = still_frame(view, projection, sun_dir, 10.0);
     let render = |model: MultipleScatteringModel| {
         let mut s = settings.clone();
         s.lighting.multiple_scattering.model = model;
@@ -572,19 +565,12 @@ fn an_early_exit_estimates_the_rest_of_the_ray() {
     settings.march.min_steps = 128;
     settings.march.max_steps = 128;
     let eye = Vec3::new(0.0, 2.0, 0.0);
-    let frame = FrameInputs {
-        camera: Camera {
-            view: Mat4::look_at_rh(eye, eye + Vec3::new(0.2, 0.9, 0.1), Vec3::Y),
-            projection: Mat4::perspective_rh(30f32.to_radians(), W as f32 / H as f32, 1.0, 1e5),
-            depth: DepthConvention::default(),
-        },
-        sun: Sun {
-            direction: Vec3::new(0.3, 0.85, 0.2).normalize(),
-            color: Vec3::ONE,
-            illuminance: 10.0,
-        },
-        time: 0.0,
-    };
+    let frame = still_frame(
+        Mat4::look_at_rh(eye, eye + Vec3::new(0.2, 0.9, 0.1), Vec3::Y),
+        Mat4::perspective_rh(30f32.to_radians(), W as f32 / H as f32, 1.0, 1e5),
+        Vec3::new(0.3, 0.85, 0.2).normalize(),
+        10.0,
+    );
     let mean = |cutoff: f32| {
         let mut s = settings.clone();
         s.march.transmittance_cutoff = cutoff;
@@ -699,19 +685,12 @@ fn a_sphere_is_lit_from_its_sun_side_and_its_rim_is_not_a_spike() {
         let mut h = headless(settings.clone());
         h.upload_scene(&vec![[0.0; 4]; (W * H) as usize], None)
             .unwrap();
-        let frame = FrameInputs {
-            camera: Camera {
-                view: Mat4::look_at_rh(eye, center, Vec3::Y),
-                projection: Mat4::perspective_rh(36f32.to_radians(), W as f32 / H as f32, 1.0, 1e6),
-                depth: DepthConvention::default(),
-            },
-            sun: Sun {
-                direction: sun,
-                color: Vec3::ONE,
-                illuminance: 10.0,
-            },
-            time: 0.0,
-        };
+        let frame = still_frame(
+            Mat4::look_at_rh(eye, center, Vec3::Y),
+            Mat4::perspective_rh(36f32.to_radians(), W as f32 / H as f32, 1.0, 1e6),
+            sun,
+            10.0,
+        );
         h.render(&frame).unwrap();
         h.read_clouds().unwrap()
     };
@@ -1130,19 +1109,7 @@ fn clouds_in_the_planets_shadow_keep_their_sky_light() {
         let view = Mat4::look_at_rh(eye, eye + Vec3::new(0.0, 1.0, 0.6), Vec3::Z);
         let projection = Mat4::perspective_rh(70f32.to_radians(), W as f32 / H as f32, 1.0, 1e6);
         let e = elevation_deg.to_radians();
-        let frame = FrameInputs {
-            camera: Camera {
-                view,
-                projection,
-                depth: DepthConvention::default(),
-            },
-            sun: Sun {
-                direction: Vec3::new(e.cos(), e.sin(), 0.0),
-                color: Vec3::ONE,
-                illuminance: 0.0,
-            },
-            time: 0.0,
-        };
+        let frame = still_frame(view, projection, Vec3::new(e.cos(), e.sin(), 0.0), 0.0);
         h.upload_scene(&vec![[0.0; 4]; (W * H) as usize], None)
             .unwrap();
         h.render(&frame).unwrap();
