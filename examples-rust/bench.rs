@@ -362,7 +362,7 @@ fn sum_wall(rows: &[&Row]) -> f64 {
 fn config_table(rows: &[Row], configs: &[String], baseline: &str, title: &str) -> String {
     let mut md = format!(
         "## {title}\n\n\
-         | size | config | wall ms (median) | cost vs {baseline} | FLIP mean (median) | FLIP mean (worst) | FLIP p99 (median) | rays | samples/ray | light samples/ray | GPU ms (march+resolve+composite) | GPU MiB |\n\
+         | size | config | wall ms (median) | cost vs {baseline} | FLIP mean (median) | FLIP mean (worst) | FLIP p99 (median) | rays | samples/ray | light samples/ray | GPU ms (all passes) | GPU MiB |\n\
          |---|---|---|---|---|---|---|---|---|---|---|---|\n"
     );
     let mut sizes: Vec<(u32, u32)> = rows.iter().map(|r| r.size).collect();

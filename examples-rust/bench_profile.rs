@@ -53,6 +53,17 @@ fn gpu_table(rows: &[(&str, &Cost)]) -> String {
     md
 }
 
+/// The default level with no cloud anywhere.
+fn no_clouds_settings(weather: &Weather) -> Settings {
+    let mut s = Settings {
+        weather: weather.clone(),
+        ..Settings::default()
+    };
+    Quality::Medium.apply(&mut s);
+    s.weather = Weather::clear();
+    s
+}
+
 /// Measures the breakdown (sparse, ground view, default level, settled) at `size`; returns the
 /// markdown section (also printed).
 pub fn profile_section(size: (u32, u32)) -> Result<String, String> {
@@ -70,9 +81,13 @@ pub fn profile_section(size: (u32, u32)) -> Result<String, String> {
     let mut one_light = medium();
     one_light.lighting.light_steps = 1;
     let one_light = cost(&mut h, one_light)?;
-    let mut no_clouds = medium();
-    no_clouds.weather = Weather::clear();
-    let no_clouds = cost(&mut h, no_clouds)?;
+    let no_clouds = no_clouds_settings(&weather);
+    let no_clouds = cost(&mut h, no_clouds.clone())?;
+    // The same clear frame with the output a render-pass-only target: the composite as a
+    // fullscreen triangle instead of a compute pass (what a host gets without STORAGE_BINDING).
+    h.set_storage_output(false).map_err(|e| e.to_string())?;
+    let render_composite = cost(&mut h, no_clouds_settings(&weather))?;
+    h.set_storage_output(true).map_err(|e| e.to_string())?;
 
     let light = (full.0 - one_light.0).max(0.0);
     let view = (one_light.0 - no_clouds.0).max(0.0);
@@ -94,10 +109,18 @@ pub fn profile_section(size: (u32, u32)) -> Result<String, String> {
         "profile {}x{} GPU (timestamps): march {march:.3} ms, shadow map {shadow:.3} ms, ambient probe {ambient:.3} ms, resolve {resolve:.3} ms, composite {composite:.3} ms; one light sample: march {:.3} ms; no clouds: march {:.3} ms",
         size.0, size.1, one_light.3[0], no_clouds.3[0]
     );
+    println!(
+        "profile {}x{} composite: compute pass {:.1} ms wall ({:.3} ms GPU), fullscreen triangle {:.1} ms wall ({:.3} ms GPU), frames with no clouds",
+        size.0, size.1, no_clouds.0, no_clouds.3[4], render_composite.0, render_composite.3[4]
+    );
     let gpu = gpu_table(&[
         ("full frame", &full),
         ("one light sample", &one_light),
         ("no clouds", &no_clouds),
+        (
+            "no clouds, composite as a fullscreen triangle",
+            &render_composite,
+        ),
     ]);
     Ok(format!(
         "\n## Where a default frame's time goes ({}x{}, sparse, ground view, medium, settled)\n\n\
@@ -106,7 +129,9 @@ pub fn profile_section(size: (u32, u32)) -> Result<String, String> {
          per cloud sample instead of {} ({:.1} light samples per ray left; the difference is \
          the light march); the clear preset (no cloud anywhere: what remains are the fixed \
          passes, every pixel's resolve and composite and the empty trace). The view-ray march \
-         is what lies between.\n\n| part | wall ms | share of the frame |\n|---|---|---|\n\
+         is what lies between. The composite is a compute pass (the output allows storage \
+         writes); the last row of the GPU table composites the clear frame by a fullscreen \
+         triangle instead ({:.1} ms wall against {:.1}).\n\n| part | wall ms | share of the frame |\n|---|---|---|\n\
          | light march toward the sun | {light:.1} | {:.0}% |\n\
          | view-ray march (coarse probes included) | {view:.1} | {:.0}% |\n\
          | fixed full-resolution passes | {fixed:.1} | {:.0}% |\n\
@@ -117,6 +142,8 @@ pub fn profile_section(size: (u32, u32)) -> Result<String, String> {
         full.2,
         Settings::default().lighting.light_steps,
         one_light.2,
+        render_composite.0,
+        no_clouds.0,
         share(light),
         share(view),
         share(fixed),

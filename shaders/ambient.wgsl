@@ -19,26 +19,42 @@
 
 // The rays are marched in AMBIENT_SUBSETS interleaved subsets (ray i in subset i mod 3), one
 // subset per frame (all of them on a view's first frame and after its history is dropped:
-// a camera cut, a resize, a settings change), one ray per invocation; each subset keeps its
-// sums, and `ambient_resolve` adds the latest of all of them. So a frame costs a third of the
-// rays, the estimate is the whole set's, and each part of it is at most two frames old.
+// a camera cut, a resize, a settings change); each subset keeps its sums, and
+// `ambient_resolve` adds the latest of all of them. So a frame costs a third of the rays, the
+// estimate is the whole set's, and each part of it is at most two frames old.
+// Each ray is marched in AMBIENT_PARTS consecutive ranges of its steps, one per invocation
+// (march_layer, shaders/march_ray.wgsl), put together front to back in workgroup memory: the
+// pass is a few hundred invocations, so its time on a GPU is one ray's chain of dependent
+// samples, which the parts cut eightfold (docs/performance.md).
 
 // Per hemisphere (0 above, 1 below): rgb E_clouds (the sun's units × sr), a V.
 @group(0) @binding(13) var<storage, read_write> ambient_out: array<vec4f, 2>;
-// Per subset and hemisphere (index 2 × subset + hemisphere): the weighted sums of (L, T), and
-// (the sum of the weights, 0, 0, 0).
-@group(0) @binding(14) var<storage, read_write> ambient_partial: array<vec4f, 12>;
+// Per subset, hemisphere and workgroup (index AMBIENT_GROUPS × (2 × subset + hemisphere) +
+// group), two vec4: the weighted sums of (L, T), and (the sum of the weights, 0, 0, 0).
+@group(0) @binding(14) var<storage, read_write> ambient_partial: array<vec4f, 96>;
 // x: the first subset this frame marches, y: how many (1, or all 3).
 @group(0) @binding(15) var<storage, read> ambient_params: vec4u;
 
 const AMBIENT_SUBSETS: u32 = 3u;
 const AMBIENT_THREADS: u32 = 64u;
+const AMBIENT_PARTS: u32 = 8u;
+// Rays per workgroup, and workgroups per subset and hemisphere (64 rays).
+const AMBIENT_GROUP_RAYS: u32 = 8u;
+const AMBIENT_GROUPS: u32 = 8u;
 const AMBIENT_COSINE_RAYS: u32 = 128u;
 const AMBIENT_SUN_RAYS: u32 = 64u;
 const GOLDEN_ANGLE: f32 = 2.39996322973;
 
 var<workgroup> partial: array<vec4f, 64>;
 var<workgroup> partial_weight: array<f32, 64>;
+// Each invocation's part of its ray: (L, T) and whether the part stopped at the cutoff.
+var<workgroup> part_light: array<vec4f, 64>;
+var<workgroup> part_stopped: array<u32, 64>;
+
+// A ray that met nothing: no light, full transmittance.
+fn march_layer_none() -> MarchRay {
+    return MarchRay(vec3f(0.0), 1.0, 0.0, 0.0, 0u, -1.0, false);
+}
 
 // Two unit vectors completing `axis` to an orthonormal basis.
 fn basis_of(axis: vec3f) -> mat2x3f {
@@ -79,11 +95,14 @@ fn sun_lobes() -> SunLobes {
     return SunLobes(u.phase.xy, vec2f(first, n - first));
 }
 
-// One workgroup per hemisphere (x) and subset marched this frame (y).
+// AMBIENT_GROUPS workgroups per hemisphere (x / AMBIENT_GROUPS) and subset marched this frame
+// (y); in each, AMBIENT_GROUP_RAYS rays of AMBIENT_PARTS invocations.
 @compute @workgroup_size(64, 1, 1)
 fn ambient(@builtin(local_invocation_id) lid: vec3u, @builtin(workgroup_id) wg: vec3u) {
     let cam = u.camera.xyz;
-    let sign = select(1.0, -1.0, wg.x == 1u);
+    let hemisphere = wg.x / AMBIENT_GROUPS;
+    let group = wg.x % AMBIENT_GROUPS;
+    let sign = select(1.0, -1.0, hemisphere == 1u);
     let normal = sign * normalize(cam + u.planet.xyz * u.planet.w);
     let normal_frame = basis_of(normal);
     let sun = u.sun.xyz;
@@ -95,8 +114,10 @@ fn ambient(@builtin(local_invocation_id) lid: vec3u, @builtin(workgroup_id) wg: 
     // clouds' detail rather than a blur of it, whose transmittance would be too low.
     let pixel_angle = 0.25 * sqrt(2.0 * PI / n_c);
     let subset = (ambient_params.x + wg.y) % AMBIENT_SUBSETS;
-    // (AMBIENT_COSINE_RAYS + AMBIENT_SUN_RAYS) / AMBIENT_SUBSETS = 64 rays: one each.
-    let i = subset + AMBIENT_SUBSETS * lid.x;
+    // (AMBIENT_COSINE_RAYS + AMBIENT_SUN_RAYS) / AMBIENT_SUBSETS = 64 rays per subset.
+    let ray_in_group = lid.x / AMBIENT_PARTS;
+    let part = lid.x % AMBIENT_PARTS;
+    let i = subset + AMBIENT_SUBSETS * (group * AMBIENT_GROUP_RAYS + ray_in_group);
     var dir: vec3f;
     if (i < AMBIENT_COSINE_RAYS) {
         let k = f32(i);
@@ -114,17 +135,51 @@ fn ambient(@builtin(local_invocation_id) lid: vec3u, @builtin(workgroup_id) wg: 
     var sum = vec4f(0.0);
     var weight = 0.0;
     let cos_n = dot(dir, normal);
-    // A sun-lobe ray outside this hemisphere weighs 0.
-    if (cos_n > 0.0) {
+    // A fixed low-discrepancy offset per ray (the directions are fixed too).
+    let jitter = fract(0.5 + f32(i) * 0.61803398875);
+    // A sun-lobe ray outside this hemisphere weighs 0 (and is not marched).
+    let marched = cos_n > 0.0;
+    let first_part = lid.x - part;
+    // First the optical depth along the view where each part starts (the column light looks
+    // back along the view ray by it): each part's own, put together over the parts before.
+    if (marched) {
+        part_light[lid.x] = vec4f(part_view_depth(cam, dir, u.layer.w, jitter, pixel_angle, part, AMBIENT_PARTS), 0.0);
+    }
+    workgroupBarrier();
+    var tau_view_start = 0.0;
+    for (var k = 0u; k < part; k++) {
+        let d = part_light[first_part + k];
+        tau_view_start = select(tau_view_start + d.x, d.y, d.z > 0.0);
+    }
+    workgroupBarrier();
+    if (marched) {
+        light_samples = 0u;
+        let ray = march_layer(cam, dir, u.layer.w, jitter, pixel_angle, part, AMBIENT_PARTS, tau_view_start);
+        part_light[lid.x] = vec4f(ray.radiance, ray.transmittance);
+        part_stopped[lid.x] = u32(ray.stopped);
+    }
+    workgroupBarrier();
+    if (marched && part == 0u) {
         let c = dot(dir, sun);
         let density = n_c * cos_n / PI
             + lobes.count.x * henyey_greenstein(c, lobes.g.x)
             + lobes.count.y * henyey_greenstein(c, lobes.g.y);
         weight = cos_n / density;
-        light_samples = 0u;
-        // A fixed low-discrepancy offset per ray (the directions are fixed too).
-        let jitter = fract(0.5 + f32(i) * 0.61803398875);
-        let ray = march_ray(cam, dir, u.layer.w, jitter, pixel_angle);
+        // The parts front to back, up to the first that stopped (its estimate of the rest of
+        // the ray stands for everything behind it).
+        var ray = march_layer_none();
+        for (var k = 0u; k < AMBIENT_PARTS; k++) {
+            let p = part_light[lid.x + k];
+            ray.radiance += ray.transmittance * p.rgb;
+            ray.transmittance *= p.a;
+            if (part_stopped[lid.x + k] != 0u) {
+                break;
+            }
+        }
+        // Where the ray enters the main layer, for the cirrus's order (as march_ray has it).
+        let seg = medium_segments(cam, dir, u.layer.w);
+        ray.layer_entry = select(-1.0, seg.a.x, seg.count > 0u);
+        ray = with_cirrus(ray, cam, dir, u.layer.w);
         sum = weight * vec4f(ray.radiance, ray.transmittance);
     }
     partial[lid.x] = sum;
@@ -138,7 +193,7 @@ fn ambient(@builtin(local_invocation_id) lid: vec3u, @builtin(workgroup_id) wg: 
         workgroupBarrier();
     }
     if (lid.x == 0u) {
-        let slot = 2u * (2u * subset + wg.x);
+        let slot = 2u * (AMBIENT_GROUPS * (2u * subset + hemisphere) + group);
         ambient_partial[slot] = partial[0];
         ambient_partial[slot + 1u] = vec4f(partial_weight[0], 0.0, 0.0, 0.0);
     }
@@ -150,9 +205,11 @@ fn ambient_resolve(@builtin(local_invocation_id) lid: vec3u) {
     var sum = vec4f(0.0);
     var weight = 0.0;
     for (var subset = 0u; subset < AMBIENT_SUBSETS; subset++) {
-        let slot = 2u * (2u * subset + lid.x);
-        sum += ambient_partial[slot];
-        weight += ambient_partial[slot + 1u].x;
+        for (var group = 0u; group < AMBIENT_GROUPS; group++) {
+            let slot = 2u * (AMBIENT_GROUPS * (2u * subset + lid.x) + group);
+            sum += ambient_partial[slot];
+            weight += ambient_partial[slot + 1u].x;
+        }
     }
     let total = sum / weight;
     ambient_out[lid.x] = vec4f(total.rgb * PI, total.a);

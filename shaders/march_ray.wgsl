@@ -239,18 +239,114 @@ struct MarchRay {
     cloud_depth: f32,
     front_depth: f32,
     samples: u32,
+    // Where the ray enters the main layer (a negative value: it does not).
+    layer_entry: f32,
+    // Whether the march stopped at the transmittance cutoff, with its estimate of the rest of
+    // the ray added (a part of a ray that did: the parts after it add nothing).
+    stopped: bool,
 }
 
+// The whole ray: the main layer, then the high (cirrus) layer.
 fn march_ray(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32) -> MarchRay {
+    return with_cirrus(march_layer(cam, dir, max_t, jitter, pixel_angle, 0u, 1u, 0.0), cam, dir, max_t);
+}
+
+// The main layer's march over part `part` of `parts` consecutive ranges of the ray's steps
+// (the whole ray for 0 of 1). The steps are the whole ray's: the parts of one ray partition
+// its steps, each starts with transmittance 1, and put together front to back
+// (L = L0 + T0 L1 + ..., T = T0 T1 ..., up to the first part that stopped) they give the
+// whole ray's march, except that a part entering the middle of a cloud starts its optical
+// depth along the view (tau_view, the column's view bound) and its coarse probes afresh, and
+// takes the haze at its own depth. The ambient probe marches its rays so, a part per
+// invocation: a ray's latency, not the work, bounds that pass on a GPU.
+// Where a ray's steps lie: its segments in the layer, their lengths, the step count and the
+// power of the distance-grown spacing. The march and the ambient probe's parts share them.
+struct RaySteps {
+    seg: Segments,
+    len_a: f32,
+    total: f32,
+    n: u32,
+    power: f32,
+}
+
+fn ray_steps(cam: vec3f, dir: vec3f, max_t: f32) -> RaySteps {
+    let seg = medium_segments(cam, dir, max_t);
+    let len_a = select(0.0, seg.a.y - seg.a.x, seg.count > 0u);
+    let len_b = select(0.0, seg.b.y - seg.b.x, seg.count > 1u);
+    let total = len_a + len_b;
+    // Step count grows with the length inside the layer (long horizon paths get more steps).
+    let thickness = u.layer.y - u.layer.x;
+    let n_f = mix(u.march.x, u.march.y, clamp(total / (4.0 * thickness), 0.0, 1.0));
+    let n = max(u32(ceil(n_f)), 1u);
+    // Steps grow with distance on long paths: sample k sits at s = total (k / n)^p, p from 1
+    // (paths up to a layer thick) to 2 (five layers and more), so the cloud around the camera
+    // is resolved finely and the far horizon coarsely. Consecutive positions partition
+    // [0, total] exactly, which keeps Hillaire's per-step integral energy-conserving.
+    var power = 1.0;
+    if (u.opts.y > 0.5) {
+        power = 1.0 + clamp((total - thickness) / (4.0 * thickness), 0.0, 1.0);
+    }
+    return RaySteps(seg, len_a, total, n, power);
+}
+
+// The distance along the ray of the path length `s` inside the layer.
+fn ray_distance(steps: RaySteps, s: f32) -> f32 {
+    return select(steps.seg.b.x + (s - steps.len_a), steps.seg.a.x + s, s < steps.len_a);
+}
+
+// The optical depth along the view where part `part` of `parts` of the ray's steps starts, as
+// march_layer's tau_view counts it (since the ray entered the current cloud), from one density
+// sample per step before it, all fine: each invocation of a ray's parts sums its own part's
+// (the whole of it, and since its last run of FINE_EMPTY empty samples) and the parts before
+// put it together (ambient.wgsl).
+fn part_view_depth(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32, part: u32, parts: u32) -> vec3f {
+    base_texel = 1.0 / (u.scales.x * f32(textureDimensions(base_tex).x));
+    detail_texel = 1.0 / (u.scales.y * f32(textureDimensions(detail_tex).x));
+    let steps = ray_steps(cam, dir, max_t);
+    var all = 0.0;
+    var since_gap = 0.0;
+    var gap = 0.0;
+    var empty_run = 0u;
+    if (steps.total > 0.0) {
+        let inv_n = 1.0 / f32(steps.n);
+        for (var i = steps.n * part / parts; i < steps.n * (part + 1u) / parts; i++) {
+            let x0 = f32(i) * inv_n;
+            let x1 = f32(i + 1u) * inv_n;
+            let s = steps.total * pow(x0 + jitter * (x1 - x0), steps.power);
+            let dt = steps.total * (pow(x1, steps.power) - pow(x0, steps.power));
+            let t = ray_distance(steps, s);
+            let sigma_t = sample_density(cam + dir * t, false, t * pixel_angle) * u.shape.z;
+            if (sigma_t <= 0.0) {
+                empty_run += 1u;
+                if (empty_run >= FINE_EMPTY) {
+                    since_gap = 0.0;
+                    gap = 1.0;
+                }
+                continue;
+            }
+            empty_run = 0u;
+            all += sigma_t * dt;
+            since_gap += sigma_t * dt;
+        }
+    }
+    return vec3f(all, since_gap, gap);
+}
+
+// After FINE_EMPTY empty fine samples the march goes coarse again (march_layer).
+const FINE_EMPTY: u32 = 4u;
+
+fn march_layer(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32, part: u32, parts: u32, tau_view_start: f32) -> MarchRay {
     base_texel = 1.0 / (u.scales.x * f32(textureDimensions(base_tex).x));
     detail_texel = 1.0 / (u.scales.y * f32(textureDimensions(detail_tex).x));
     var samples = 0u;
     let up = u.planet.xyz;
     let radius = u.planet.w;
-    let seg = medium_segments(cam, dir, max_t);
-    let len_a = select(0.0, seg.a.y - seg.a.x, seg.count > 0u);
-    let len_b = select(0.0, seg.b.y - seg.b.x, seg.count > 1u);
-    let total = len_a + len_b;
+    let path = ray_steps(cam, dir, max_t);
+    let seg = path.seg;
+    let total = path.total;
+    let n = path.n;
+    let power = path.power;
+    let thickness = u.layer.y - u.layer.x;
     let cos_theta = dot(u.sun.xyz, dir);
     let sun_radiance = u.sun.w * u.sun_color.rgb;
     var radiance = vec3f(0.0);
@@ -258,21 +354,9 @@ fn march_ray(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32) 
     var cloud_depth = 0.0;
     // Where the ray first met cloud (the start of the first step with density), 0 = never.
     var front_depth = 0.0;
+    var stopped = false;
     let clouds_possible = debug_mode() != DEBUG_OFF || u.shape.x > 0.0 || u.horizon.x > 0.0;
     if (total > 0.0 && clouds_possible) {
-        // Step count grows with the length inside the layer (long horizon paths get more steps).
-        let thickness = u.layer.y - u.layer.x;
-        let n_f = mix(u.march.x, u.march.y, clamp(total / (4.0 * thickness), 0.0, 1.0));
-        let n = max(u32(ceil(n_f)), 1u);
-        // Steps grow with distance on long paths: sample k sits at s = total (k / n)^p, p from 1
-        // (paths up to a layer thick) to 2 (five layers and more), so the cloud around the camera
-        // is resolved finely and the far horizon coarsely. Consecutive positions partition
-        // [0, total] exactly, which keeps Hillaire's per-step integral energy-conserving.
-        var power = 1.0;
-        if (u.opts.y > 0.5) {
-            power = 1.0 + clamp((total - thickness) / (4.0 * thickness), 0.0, 1.0);
-        }
-
         // Phase per multiple-scattering octave (Wrenninge: eccentricity scaled by c^i).
         let octaves = u32(u.ms.x);
         var phase_oct: array<f32, 8>;
@@ -283,7 +367,7 @@ fn march_ray(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32) 
         }
         var depth_weighted = 0.0;
         // Optical depth from where the ray entered the current cloud to the step start.
-        var tau_view = 0.0;
+        var tau_view = tau_view_start;
         let delta_eddington_on = u32(u.ms_model.x) == 2u;
         let inv_n = 1.0 / f32(n);
         // Coarse-then-fine (Schneider 2015): while nothing has been found, steps COARSE times as
@@ -294,19 +378,19 @@ fn march_ray(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32) 
         // skipped intervals count as empty, so the integral stays energy-conserving.
         let coarse_on = u.opts.x > 0.5 && debug_mode() == DEBUG_OFF;
         let coarse = select(1u, 4u, coarse_on);
-        const FINE_EMPTY: u32 = 4u;
         var fine = !coarse_on;
         var empty_run = 0u;
-        var i = 0u;
+        var i = n * part / parts;
+        let end = n * (part + 1u) / parts;
         // Bounded: each fine step advances i; each coarse probe either advances i by `coarse`
         // or switches to fine mode (at most once per run of fine steps).
-        for (var guard = 0u; guard < 3u * n + 8u && i < n; guard++) {
-            let steps = select(min(coarse, n - i), 1u, fine);
+        for (var guard = 0u; guard < 3u * n + 8u && i < end; guard++) {
+            let steps = select(min(coarse, end - i), 1u, fine);
             let x0 = f32(i) * inv_n;
             let x1 = f32(i + steps) * inv_n;
             let s = total * pow(x0 + jitter * (x1 - x0), power);
             let dt = total * (pow(x1, power) - pow(x0, power));
-            let t = select(seg.b.x + (s - len_a), seg.a.x + s, s < len_a);
+            let t = ray_distance(path, s);
             let p = cam + dir * t;
             let footprint = t * pixel_angle;
             samples += 1u;
@@ -335,7 +419,7 @@ fn march_ray(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32) 
             if (front_depth == 0.0) {
                 // The start of this step (not the jittered sample): the same for every visit.
                 let s0 = total * pow(x0, power);
-                front_depth = max(select(seg.b.x + (s0 - len_a), seg.a.x + s0, s0 < len_a), 1e-3);
+                front_depth = max(ray_distance(path, s0), 1e-3);
             }
             let sigma_t = density * u.shape.z;
             let tau = sun_optical_depth(p, light_step_count(t), footprint);
@@ -374,6 +458,7 @@ fn march_ray(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32) 
                 // the light the remaining weight T would have gathered is not dropped. The
                 // transmittance is left as it is (the scene behind still shows through T).
                 radiance += transmittance * source / sigma_t;
+                stopped = true;
                 break;
             }
         }
@@ -387,26 +472,33 @@ fn march_ray(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32) 
         }
     }
 
-    // The high layer, in front of or behind the main layer depending on where it is crossed.
+    let layer_entry = select(-1.0, seg.a.x, seg.count > 0u);
+    return MarchRay(radiance, transmittance, cloud_depth, front_depth, samples, layer_entry, stopped);
+}
+
+// The high layer added to a main-layer march: in front of or behind the main layer depending
+// on where it is crossed.
+fn with_cirrus(layer: MarchRay, cam: vec3f, dir: vec3f, max_t: f32) -> MarchRay {
+    var ray = layer;
     if (debug_mode() == DEBUG_OFF && u.cirrus.x > 0.0) {
-        let c = cirrus_layer(cam, dir, max_t, cos_theta, sun_radiance);
+        let c = cirrus_layer(cam, dir, max_t, dot(u.sun.xyz, dir), u.sun.w * u.sun_color.rgb);
         if (c.transmittance < 1.0) {
             let fade = haze_fade(c.distance);
             let lc = c.radiance * fade + (1.0 - fade) * (1.0 - c.transmittance) * u.haze.rgb;
-            let in_front = seg.count == 0u || c.distance < seg.a.x;
+            let in_front = ray.layer_entry < 0.0 || c.distance < ray.layer_entry;
             if (in_front) {
-                radiance = lc + c.transmittance * radiance;
+                ray.radiance = lc + c.transmittance * ray.radiance;
             } else {
-                radiance = radiance + transmittance * lc;
+                ray.radiance = ray.radiance + ray.transmittance * lc;
             }
-            if (cloud_depth == 0.0) {
-                cloud_depth = c.distance;
+            if (ray.cloud_depth == 0.0) {
+                ray.cloud_depth = c.distance;
             }
-            if (front_depth == 0.0 || c.distance < front_depth) {
-                front_depth = c.distance;
+            if (ray.front_depth == 0.0 || c.distance < ray.front_depth) {
+                ray.front_depth = c.distance;
             }
-            transmittance *= c.transmittance;
+            ray.transmittance *= c.transmittance;
         }
     }
-    return MarchRay(radiance, transmittance, cloud_depth, front_depth, samples);
+    return ray;
 }

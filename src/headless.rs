@@ -125,6 +125,7 @@ pub struct Headless {
     errors: DeviceErrors,
     targets: Option<OwnedTargets>,
     in_place: bool,
+    storage_output: bool,
 }
 
 fn to_f16(data: &[[f32; 4]]) -> Vec<u8> {
@@ -182,6 +183,7 @@ impl Headless {
             errors,
             targets: None,
             in_place: false,
+            storage_output: true,
         })
     }
 
@@ -203,6 +205,17 @@ impl Headless {
     /// Composite onto the scene texture itself (blend path) instead of a separate output.
     pub fn set_in_place(&mut self, in_place: bool) {
         self.in_place = in_place;
+    }
+
+    /// Whether the output texture allows storage writes, so that the composite runs as a
+    /// compute pass (the default); `false` makes it a render-pass-only target, composited by
+    /// a fullscreen triangle. Recreates the targets (the scene starts black again).
+    pub fn set_storage_output(&mut self, storage: bool) -> Result<()> {
+        self.storage_output = storage;
+        match self.targets.as_ref().map(|t| (t.width, t.height)) {
+            Some((w, h)) => self.resize(w, h),
+            None => Ok(()),
+        }
     }
 
     fn take_errors(&self) -> Result<()> {
@@ -234,10 +247,15 @@ impl Headless {
                 wgpu::TextureFormat::R32Float,
                 U::TEXTURE_BINDING | U::COPY_DST,
             );
+            let storage = if self.storage_output {
+                U::STORAGE_BINDING
+            } else {
+                U::empty()
+            };
             let output = make(
                 "nimbus output",
                 wgpu::TextureFormat::Rgba16Float,
-                color_usage,
+                color_usage | storage,
             );
             OwnedTargets {
                 width,

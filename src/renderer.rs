@@ -56,7 +56,9 @@ pub enum ColorTargets<'a> {
     /// blendable format.
     InPlace(&'a wgpu::TextureView),
     /// Read the scene color (`TEXTURE_BINDING`) and write `out = scene * T + L` to a separate
-    /// output (`RENDER_ATTACHMENT`) of the same size.
+    /// output of the same size: `RENDER_ATTACHMENT` (a fullscreen triangle), or
+    /// `STORAGE_BINDING` in `Rgba8Unorm`, `Rgba16Float` or `Rgba32Float` (a compute pass,
+    /// chosen whenever the output allows it: much faster on compute-oriented GPUs).
     Separate {
         /// The host's rendered scene.
         scene: &'a wgpu::TextureView,
@@ -326,7 +328,15 @@ fn check_targets(t: &Targets, mips: TargetMips) -> Result<CheckedTargets> {
         ColorTargets::Separate { scene, output } => {
             let size = check_2d("output", output, mips.color, mips.layered)?;
             let format = check_format("output", output, OUTPUT_FORMATS, OUTPUT_NAMES)?;
-            check_usage("output", output, use_render)?;
+            // A storage-writable output is composited by a compute pass (src/gpu/composite.rs).
+            if !crate::gpu::composite::storage_writable(output) {
+                check_usage("output", output, use_render).map_err(|_| {
+                    invalid_target(
+                        "output",
+                        "needs RENDER_ATTACHMENT usage, or STORAGE_BINDING with Rgba8Unorm, Rgba16Float or Rgba32Float",
+                    )
+                })?;
+            }
             check_size(
                 "scene_color",
                 check_2d("scene_color", scene, mips.color, mips.layered)?,

@@ -53,7 +53,9 @@ fn assert_frames_create_nothing(h: &mut Headless, what: &str) {
 #[test]
 fn frames_create_no_gpu_objects() {
     let mut h = headless(small_noise(3));
-    assert_frames_create_nothing(&mut h, "separate output");
+    assert_frames_create_nothing(&mut h, "separate output (compute composite)");
+    h.set_storage_output(false).unwrap();
+    assert_frames_create_nothing(&mut h, "separate output (fullscreen triangle)");
     h.set_in_place(true);
     assert_frames_create_nothing(&mut h, "in place");
     // Scene depth switches the march and composite variants: warm up, then again nothing.

@@ -191,6 +191,14 @@ pub unsafe extern "C" fn nimbus_texture_create(
             if is_color(desc.format) {
                 usage |= U::RENDER_ATTACHMENT;
             }
+            // An output Nimbus can store into is composited by a compute pass (much faster
+            // on compute-oriented GPUs; src/gpu/composite.rs).
+            if crate::gpu::shaders::STORAGE_OUTPUT_FORMATS
+                .iter()
+                .any(|(f, _)| *f == format)
+            {
+                usage |= U::STORAGE_BINDING;
+            }
             let device = inner.device.clone();
             let texture = gpu_scope(&device, || {
                 texture_2d(

@@ -1,9 +1,10 @@
 //! The ambient probe: per view and frame, the clouds' irradiance at the camera from the
 //! hemisphere above and below, and how much of each hemisphere's light comes from behind the
 //! clouds (shaders/ambient.wgsl). 192 march rays per hemisphere in three interleaved subsets,
-//! one subset a frame (all three when the view has no history), one ray per invocation; a
-//! resolve adds every subset's latest sums into the view's [`AMBIENT_BYTES`]-byte buffer,
-//! which stays on the GPU until read.
+//! one subset a frame (all three when the view has no history), each ray in
+//! [`AMBIENT_PARTS`] ranges of its steps, one per invocation; a resolve adds every subset's
+//! latest sums into the view's [`AMBIENT_BYTES`]-byte buffer, which stays on the GPU until
+//! read.
 
 use super::bind_cache::BindCache;
 use super::compute::{frame_pipeline, storage_buffer_entry};
@@ -22,8 +23,16 @@ pub(crate) const AMBIENT_USAGE: wgpu::BufferUsages =
 /// The interleaved ray subsets (shaders/ambient.wgsl `AMBIENT_SUBSETS`).
 pub(crate) const AMBIENT_SUBSETS: u32 = 3;
 
-/// Size of a view's per-subset sums: per subset and hemisphere two `vec4<f32>`.
-pub(crate) const AMBIENT_PARTIAL_BYTES: u64 = AMBIENT_SUBSETS as u64 * 2 * 2 * 16;
+/// The invocations one ray is marched by (shaders/ambient.wgsl `AMBIENT_PARTS`).
+pub(crate) const AMBIENT_PARTS: u32 = 8;
+
+/// Workgroups per subset and hemisphere (shaders/ambient.wgsl `AMBIENT_GROUPS`): 64 rays of
+/// [`AMBIENT_PARTS`] invocations, 64 invocations a workgroup.
+pub(crate) const AMBIENT_GROUPS: u32 = 64 * AMBIENT_PARTS / 64;
+
+/// Size of a view's per-subset sums: per subset, hemisphere and workgroup two `vec4<f32>`.
+pub(crate) const AMBIENT_PARTIAL_BYTES: u64 =
+    AMBIENT_SUBSETS as u64 * 2 * AMBIENT_GROUPS as u64 * 2 * 16;
 
 /// A view's ambient probe buffers: the output, the per-subset sums, the frame's parameters.
 pub(crate) struct AmbientBuffers {
@@ -183,8 +192,8 @@ impl AmbientPipeline {
             });
             pass.set_pipeline(&self.pipeline);
             pass.set_bind_group(0, &bind, &[]);
-            // One workgroup per hemisphere and subset marched.
-            pass.dispatch_workgroups(2, subsets, 1);
+            // AMBIENT_GROUPS workgroups per hemisphere and subset marched.
+            pass.dispatch_workgroups(2 * AMBIENT_GROUPS, subsets, 1);
         }
         // A pass of its own: the sums are written above and read here.
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {

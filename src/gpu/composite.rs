@@ -1,7 +1,9 @@
-//! Composite pass: out = scene * T + L, as a fullscreen triangle, with a depth-aware upsample
-//! from the trace resolution. In place, the blend unit does the multiply-add on the host's
-//! color; otherwise the shader reads the scene and writes the output. Pipelines are cached per
-//! (output format, in place, scene-depth kind) on first use.
+//! Composite pass: out = scene * T + L, with a depth-aware upsample from the trace resolution.
+//! In place, a fullscreen triangle's blend does the multiply-add on the host's color;
+//! otherwise the shader reads the scene and writes the output: by a compute pass when the
+//! output allows storage writes (`STORAGE_BINDING` and a format in `STORAGE_OUTPUT_FORMATS`),
+//! else by a fullscreen triangle. Pipelines are cached per (output format, mode, scene-depth
+//! kind) on first use.
 
 use std::collections::HashMap;
 
@@ -9,7 +11,8 @@ use bytemuck::{Pod, Zeroable};
 use glam::Mat4;
 
 use super::bind_cache::BindCache;
-use super::shaders::{pass_source, DepthKind};
+use super::compute::timed_dispatch;
+use super::shaders::{pass_source, pass_source_with_output, DepthKind, STORAGE_OUTPUT_FORMATS};
 
 /// Layout must match `CompositeUniforms` in shaders/composite.wgsl.
 #[repr(C)]
@@ -61,18 +64,104 @@ pub(crate) struct CompositeInputs<'a> {
     pub viewport: [u32; 4],
 }
 
+/// How the composite writes its output.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(crate) enum CompositeMode {
+    /// A fullscreen triangle blended onto the scene color.
+    InPlace,
+    /// A fullscreen triangle that reads the scene and writes a separate output.
+    Separate,
+    /// A compute pass that reads the scene and stores into a separate output.
+    Compute,
+}
+
+impl CompositeMode {
+    /// The mode for these targets: in place when there is no separate scene, compute when
+    /// the output can be a storage texture, else the render pass.
+    pub(crate) fn for_output(in_place: bool, output: &wgpu::TextureView) -> Self {
+        if in_place {
+            CompositeMode::InPlace
+        } else if storage_writable(output) {
+            CompositeMode::Compute
+        } else {
+            CompositeMode::Separate
+        }
+    }
+}
+
+/// Whether the compute composite can write `output`.
+pub(crate) fn storage_writable(output: &wgpu::TextureView) -> bool {
+    let texture = output.texture();
+    texture
+        .usage()
+        .contains(wgpu::TextureUsages::STORAGE_BINDING)
+        && storage_format_name(texture.format()).is_some()
+}
+
+fn storage_format_name(format: wgpu::TextureFormat) -> Option<&'static str> {
+    STORAGE_OUTPUT_FORMATS
+        .iter()
+        .find(|(f, _)| *f == format)
+        .map(|(_, name)| *name)
+}
+
+enum CompositePipeline {
+    Render(wgpu::RenderPipeline),
+    Compute(wgpu::ComputePipeline),
+}
+
 /// A composite pipeline and the bind groups made for it.
 struct Composite {
-    pipeline: wgpu::RenderPipeline,
+    pipeline: CompositePipeline,
     binds: BindCache,
 }
 
 #[derive(Default)]
 pub(crate) struct CompositeCache {
-    pipelines: HashMap<(wgpu::TextureFormat, bool, DepthKind), Composite>,
+    pipelines: HashMap<(wgpu::TextureFormat, CompositeMode, DepthKind), Composite>,
 }
 
 fn build(
+    device: &wgpu::Device,
+    format: wgpu::TextureFormat,
+    mode: CompositeMode,
+    depth: DepthKind,
+) -> CompositePipeline {
+    match mode {
+        CompositeMode::Compute => CompositePipeline::Compute(build_compute(device, format, depth)),
+        _ => CompositePipeline::Render(build_render(
+            device,
+            format,
+            mode == CompositeMode::InPlace,
+            depth,
+        )),
+    }
+}
+
+fn build_compute(
+    device: &wgpu::Device,
+    format: wgpu::TextureFormat,
+    depth: DepthKind,
+) -> wgpu::ComputePipeline {
+    let storage = storage_format_name(format)
+        .unwrap_or_else(|| unreachable!("compute composite chosen for {format:?}"));
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("composite_compute"),
+        source: wgpu::ShaderSource::Wgsl(
+            pass_source_with_output("composite_compute", depth, storage).into(),
+        ),
+    });
+    device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("composite_compute"),
+        layout: None,
+        module: &module,
+        entry_point: Some("cs_separate"),
+        compilation_options: Default::default(),
+        cache: None,
+    })
+}
+
+fn build_render(
     device: &wgpu::Device,
     format: wgpu::TextureFormat,
     in_place: bool,
@@ -138,12 +227,12 @@ impl CompositeCache {
         output: &wgpu::TextureView,
         format: wgpu::TextureFormat,
     ) {
-        let in_place = scene.is_none();
+        let mode = CompositeMode::for_output(scene.is_none(), output);
         let composite = self
             .pipelines
-            .entry((format, in_place, inputs.depth_kind))
+            .entry((format, mode, inputs.depth_kind))
             .or_insert_with(|| Composite {
-                pipeline: build(device, format, in_place, inputs.depth_kind),
+                pipeline: build(device, format, mode, inputs.depth_kind),
                 binds: BindCache::default(),
             });
         let tex = |binding, view| wgpu::BindGroupEntry {
@@ -152,7 +241,13 @@ impl CompositeCache {
         };
         let mut views = vec![inputs.clouds, inputs.cloud_depth, inputs.scene_depth];
         views.extend(scene);
-        let pipeline = &composite.pipeline;
+        if mode == CompositeMode::Compute {
+            views.push(output);
+        }
+        let layout = match &composite.pipeline {
+            CompositePipeline::Render(p) => p.get_bind_group_layout(0),
+            CompositePipeline::Compute(p) => p.get_bind_group_layout(0),
+        };
         let bind = composite.binds.get(inputs.uniforms, &views, || {
             let mut entries = vec![
                 tex(0, inputs.clouds),
@@ -166,41 +261,57 @@ impl CompositeCache {
             if let Some(scene) = scene {
                 entries.push(tex(1, scene));
             }
+            if mode == CompositeMode::Compute {
+                entries.push(tex(5, output));
+            }
             device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("nimbus composite"),
-                layout: &pipeline.get_bind_group_layout(0),
+                layout: &layout,
                 entries: &entries,
             })
         });
-        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("nimbus composite"),
-            color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                view: output,
-                depth_slice: None,
-                resolve_target: None,
-                ops: wgpu::Operations {
-                    load: wgpu::LoadOp::Load,
-                    store: wgpu::StoreOp::Store,
-                },
-            })],
-            depth_stencil_attachment: None,
-            timestamp_writes: inputs.timer.map(|t| {
-                let (begin, end) = t.writes(super::timing::Pass::Composite);
-                wgpu::RenderPassTimestampWrites {
-                    query_set: &t.query_set,
-                    beginning_of_pass_write_index: begin,
-                    end_of_pass_write_index: end,
-                }
-            }),
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, &bind, &[]);
         let [x, y, w, h] = inputs.viewport;
-        pass.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
-        pass.set_scissor_rect(x, y, w, h);
-        pass.draw(0..3, 0..1);
+        match &composite.pipeline {
+            CompositePipeline::Compute(pipeline) => timed_dispatch(
+                encoder,
+                "nimbus composite",
+                pipeline,
+                &bind,
+                (w, h),
+                inputs.timer,
+                super::timing::Pass::Composite,
+            ),
+            CompositePipeline::Render(pipeline) => {
+                let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                    label: Some("nimbus composite"),
+                    color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                        view: output,
+                        depth_slice: None,
+                        resolve_target: None,
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Load,
+                            store: wgpu::StoreOp::Store,
+                        },
+                    })],
+                    depth_stencil_attachment: None,
+                    timestamp_writes: inputs.timer.map(|t| {
+                        let (begin, end) = t.writes(super::timing::Pass::Composite);
+                        wgpu::RenderPassTimestampWrites {
+                            query_set: &t.query_set,
+                            beginning_of_pass_write_index: begin,
+                            end_of_pass_write_index: end,
+                        }
+                    }),
+                    occlusion_query_set: None,
+                    multiview_mask: None,
+                });
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, &bind, &[]);
+                pass.set_viewport(x as f32, y as f32, w as f32, h as f32, 0.0, 1.0);
+                pass.set_scissor_rect(x, y, w, h);
+                pass.draw(0..3, 0..1);
+            }
+        }
     }
 
     /// How many pipelines have been built (one per output format, mode and depth kind used).

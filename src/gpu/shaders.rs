@@ -37,6 +37,7 @@ pub(crate) const PATH_TRACE: (&str, &str) = shader!("path_trace.wgsl");
 pub(crate) const TEMPORAL: (&str, &str) = shader!("temporal.wgsl");
 pub(crate) const COMPOSITE: (&str, &str) = shader!("composite.wgsl");
 pub(crate) const COMPOSITE_SEPARATE: (&str, &str) = shader!("composite_separate.wgsl");
+pub(crate) const COMPOSITE_COMPUTE: (&str, &str) = shader!("composite_compute.wgsl");
 
 /// The noise bake's modules: also what a noise cache's bake id hashes (`crate::noise_cache`).
 pub(crate) const NOISE_BAKE_MODULES: &[(&str, &str)] = &[COMMON, NOISE, NOISE_BAKE];
@@ -76,9 +77,11 @@ pub(crate) const PASSES: &[(&str, &[(&str, &str)])] = &[
         "composite_separate",
         &[DEPTH, COMPOSITE, COMPOSITE_SEPARATE],
     ),
+    ("composite_compute", &[DEPTH, COMPOSITE, COMPOSITE_COMPUTE]),
 ];
 
 const DEPTH_PLACEHOLDER: &str = "//!SCENE_DEPTH_BINDING(";
+const OUTPUT_PLACEHOLDER: &str = "//!OUTPUT_STORAGE_BINDING(";
 
 /// The scene-depth binding (at `binding`) and its loader for a depth kind.
 fn depth_binding(kind: DepthKind, binding: &str) -> String {
@@ -93,6 +96,14 @@ fn depth_binding(kind: DepthKind, binding: &str) -> String {
         ),
     }
 }
+
+/// Output formats a compute pass can write (`texture_storage_2d` with write access in every
+/// wgpu backend), with their WGSL names.
+pub(crate) const STORAGE_OUTPUT_FORMATS: [(wgpu::TextureFormat, &str); 3] = [
+    (wgpu::TextureFormat::Rgba8Unorm, "rgba8unorm"),
+    (wgpu::TextureFormat::Rgba16Float, "rgba16float"),
+    (wgpu::TextureFormat::Rgba32Float, "rgba32float"),
+];
 
 /// The modules `pass` is built from, in order (its entry in `PASSES`).
 pub(crate) fn pass_modules(pass: &str) -> &'static [(&'static str, &'static str)] {
@@ -113,16 +124,39 @@ pub(crate) fn pass_source(pass: &str, depth: DepthKind) -> String {
         src.push_str(text);
         src.push('\n');
     }
-    while let Some(at) = src.find(DEPTH_PLACEHOLDER) {
-        let rest = &src[at + DEPTH_PLACEHOLDER.len()..];
+    replace_placeholders(&mut src, DEPTH_PLACEHOLDER, |binding| {
+        depth_binding(depth, binding)
+    });
+    src
+}
+
+/// The source of a pass that writes a storage texture (`//!OUTPUT_STORAGE_BINDING(n)`), its
+/// output declared in `storage_format` (a WGSL texel format such as `rgba16float`).
+pub(crate) fn pass_source_with_output(
+    pass: &str,
+    depth: DepthKind,
+    storage_format: &str,
+) -> String {
+    let mut src = pass_source(pass, depth);
+    replace_placeholders(&mut src, OUTPUT_PLACEHOLDER, |binding| {
+        format!(
+            "@group(0) @binding({binding}) var output: texture_storage_2d<{storage_format}, write>;"
+        )
+    });
+    src
+}
+
+/// Replaces each `placeholder` + `n)` in `src` by `declare(n)`.
+fn replace_placeholders(src: &mut String, placeholder: &str, declare: impl Fn(&str) -> String) {
+    while let Some(at) = src.find(placeholder) {
+        let rest = &src[at + placeholder.len()..];
         let close = rest
             .find(')')
             .unwrap_or_else(|| unreachable!("placeholder without `)`"));
         let binding = rest[..close].to_string();
-        let end = at + DEPTH_PLACEHOLDER.len() + close + 1;
-        src.replace_range(at..end, &depth_binding(depth, &binding));
+        let end = at + placeholder.len() + close + 1;
+        src.replace_range(at..end, &declare(&binding));
     }
-    src
 }
 
 #[cfg(test)]
@@ -144,7 +178,9 @@ mod tests {
     fn every_pass_parses_and_validates() {
         for (pass, _) in PASSES {
             for kind in [DepthKind::Depth, DepthKind::R32Float] {
-                validate(pass, &pass_source(pass, kind));
+                for format in STORAGE_OUTPUT_FORMATS.map(|(_, name)| name) {
+                    validate(pass, &pass_source_with_output(pass, kind, format));
+                }
             }
         }
     }

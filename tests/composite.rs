@@ -1,0 +1,222 @@
+//! The composite's two ways of writing a separate output: a compute pass when the output
+//! allows storage writes, a fullscreen triangle otherwise. They must give the same picture,
+//! pixel for pixel (the same arithmetic; only the store differs), with the depth-aware
+//! upsample of a half-resolution trace grid and a viewport inside the targets, and leave the
+//! pixels outside the viewport as they were. An output neither path can write is refused.
+
+mod common;
+use common::{halfs, quiet, rgba, setup, small_noise, H, W};
+
+use nimbus::demo::standard_views;
+use nimbus::device::{read_texture, texture_2d};
+use nimbus::settings::TraceResolution;
+use nimbus::{ColorTargets, Error, Renderer, Targets, Viewport};
+
+use wgpu::TextureFormat as F;
+use wgpu::TextureUsages as U;
+
+const OUTSIDE: [f32; 4] = [0.9, 0.1, 0.1, 1.0];
+
+fn upload(queue: &wgpu::Queue, texture: &wgpu::Texture, bytes: &[u8], bpp: u32) {
+    queue.write_texture(
+        texture.as_image_copy(),
+        bytes,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(texture.width() * bpp),
+            rows_per_image: Some(texture.height()),
+        },
+        texture.size(),
+    );
+}
+
+/// One frame of the ridge view (scene depth in front of part of the clouds) on the right half
+/// of 2W x H targets into `output`, whose left half holds OUTSIDE; returns its pixels.
+fn composite_into(
+    format: F,
+    usage: U,
+    to_bytes: &dyn Fn(&[[f32; 4]]) -> Vec<u8>,
+    bpp: u32,
+) -> Vec<[f32; 4]> {
+    setup();
+    let (device, queue, _) = nimbus::headless::create_device().unwrap();
+    let mut settings = quiet(small_noise(3));
+    // A half-resolution grid: the composite's depth-aware upsample runs.
+    settings.march.resolution = TraceResolution::Half;
+    let mut r = Renderer::new(&device, &queue, settings).unwrap();
+    let view = standard_views()[4];
+    let scene = view.scene(W, H);
+    let wide = |left: [f32; 4], right: &[[f32; 4]]| -> Vec<[f32; 4]> {
+        (0..2 * W * H)
+            .map(|i| {
+                let (x, y) = (i % (2 * W), i / (2 * W));
+                if x < W {
+                    left
+                } else {
+                    right[(y * W + x - W) as usize]
+                }
+            })
+            .collect()
+    };
+    let color = texture_2d(
+        &device,
+        "scene",
+        (2 * W, H),
+        F::Rgba16Float,
+        U::TEXTURE_BINDING | U::COPY_DST,
+    );
+    upload(&queue, &color, &halfs(&wide(OUTSIDE, &scene.color)), 8);
+    let depth = texture_2d(
+        &device,
+        "depth",
+        (2 * W, H),
+        F::R32Float,
+        U::TEXTURE_BINDING | U::COPY_DST,
+    );
+    let depths: Vec<f32> = wide(
+        [0.01; 4],
+        &scene.depth.iter().map(|d| [*d; 4]).collect::<Vec<_>>(),
+    )
+    .iter()
+    .map(|d| d[0])
+    .collect();
+    upload(&queue, &depth, bytemuck::cast_slice(&depths), 4);
+    let output = texture_2d(
+        &device,
+        "output",
+        (2 * W, H),
+        format,
+        usage | U::COPY_DST | U::COPY_SRC,
+    );
+    upload(
+        &queue,
+        &output,
+        &to_bytes(&vec![OUTSIDE; (2 * W * H) as usize]),
+        bpp,
+    );
+    let (cv, dv, ov) = (
+        color.create_view(&Default::default()),
+        depth.create_view(&Default::default()),
+        output.create_view(&Default::default()),
+    );
+    r.prepare(&view.frame(W, H, 0.0)).unwrap();
+    let mut enc = device.create_command_encoder(&Default::default());
+    r.encode(
+        &mut enc,
+        &Targets {
+            color: ColorTargets::Separate {
+                scene: &cv,
+                output: &ov,
+            },
+            depth: Some(&dv),
+            viewport: Some(Viewport {
+                x: W,
+                y: 0,
+                width: W,
+                height: H,
+            }),
+        },
+    )
+    .unwrap();
+    queue.submit([enc.finish()]);
+    let bytes = read_texture(&device, &queue, &output, 0).unwrap();
+    if bpp == 8 {
+        rgba(&bytes)
+    } else {
+        bytes
+            .chunks_exact(4)
+            .map(|c| [0, 1, 2, 3].map(|k| c[k] as f32 / 255.0))
+            .collect()
+    }
+}
+
+fn unorm8(pixels: &[[f32; 4]]) -> Vec<u8> {
+    pixels
+        .iter()
+        .flat_map(|p| p.map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
+        .collect()
+}
+
+/// Compares the two paths' pixels: equal within `tolerance`, the left half untouched.
+fn assert_same(compute: &[[f32; 4]], render: &[[f32; 4]], outside: [f32; 4], tolerance: f32) {
+    let (mut worst, mut clouds) = (0.0f32, 0);
+    for (i, (c, r)) in compute.iter().zip(render).enumerate() {
+        if i as u32 % (2 * W) < W {
+            assert_eq!(
+                *c, outside,
+                "compute: pixel {i} outside the viewport changed"
+            );
+            assert_eq!(
+                *r, outside,
+                "render: pixel {i} outside the viewport changed"
+            );
+            continue;
+        }
+        clouds += (c != &outside) as u32;
+        for k in 0..4 {
+            worst = worst.max((c[k] - r[k]).abs());
+        }
+    }
+    println!("compute vs fullscreen triangle: max difference {worst}, {clouds} pixels written");
+    assert!(clouds > W * H / 2, "too few pixels written ({clouds})");
+    assert!(worst <= tolerance, "the paths differ by {worst}");
+}
+
+#[test]
+fn compute_composite_matches_the_fullscreen_triangle() {
+    let f16 = |p: &[[f32; 4]]| halfs(p);
+    let compute = composite_into(F::Rgba16Float, U::STORAGE_BINDING, &f16, 8);
+    let render = composite_into(F::Rgba16Float, U::RENDER_ATTACHMENT, &f16, 8);
+    let outside = OUTSIDE.map(|v| half::f16::from_f32(v).to_f32());
+    assert_same(&compute, &render, outside, 1e-3);
+}
+
+#[test]
+fn compute_composite_matches_the_fullscreen_triangle_in_rgba8() {
+    let compute = composite_into(F::Rgba8Unorm, U::STORAGE_BINDING, &unorm8, 4);
+    let render = composite_into(F::Rgba8Unorm, U::RENDER_ATTACHMENT, &unorm8, 4);
+    let outside = OUTSIDE.map(|v| (v * 255.0).round() / 255.0);
+    assert_same(&compute, &render, outside, 1.0 / 255.0 + 1e-6);
+}
+
+#[test]
+fn an_output_neither_path_can_write_is_refused() {
+    setup();
+    let (device, queue, _) = nimbus::headless::create_device().unwrap();
+    let mut r = Renderer::new(&device, &queue, quiet(small_noise(3))).unwrap();
+    let make = |format, usage| {
+        texture_2d(&device, "t", (W, H), format, usage).create_view(&Default::default())
+    };
+    let scene = make(F::Rgba16Float, U::TEXTURE_BINDING);
+    // Sampled only; and storage in a format the compute composite does not write.
+    for output in [
+        make(F::Rgba16Float, U::TEXTURE_BINDING | U::COPY_SRC),
+        make(F::Rgba8Unorm, U::TEXTURE_BINDING),
+    ] {
+        r.prepare(&standard_views()[0].frame(W, H, 0.0)).unwrap();
+        let mut enc = device.create_command_encoder(&Default::default());
+        let e = r
+            .encode(
+                &mut enc,
+                &Targets {
+                    color: ColorTargets::Separate {
+                        scene: &scene,
+                        output: &output,
+                    },
+                    depth: None,
+                    viewport: None,
+                },
+            )
+            .unwrap_err();
+        assert!(
+            matches!(
+                e,
+                Error::InvalidTarget {
+                    target: "output",
+                    ..
+                }
+            ) && e.to_string().contains("STORAGE_BINDING"),
+            "{e}"
+        );
+    }
+}
