@@ -50,11 +50,7 @@ var<workgroup> partial_weight: array<f32, 64>;
 // Each invocation's part of its ray: (L, T) and whether the part stopped at the cutoff.
 var<workgroup> part_light: array<vec4f, 64>;
 var<workgroup> part_stopped: array<u32, 64>;
-
-// A ray that met nothing: no light, full transmittance.
-fn march_layer_none() -> MarchRay {
-    return MarchRay(vec3f(0.0), 1.0, 0.0, 0.0, 0u, -1.0, false);
-}
+var<workgroup> part_entry: array<f32, 64>;
 
 // Two unit vectors completing `axis` to an orthonormal basis.
 fn basis_of(axis: vec3f) -> mat2x3f {
@@ -157,6 +153,7 @@ fn ambient(@builtin(local_invocation_id) lid: vec3u, @builtin(workgroup_id) wg: 
         let ray = march_layer(cam, dir, u.layer.w, jitter, pixel_angle, part, AMBIENT_PARTS, tau_view_start);
         part_light[lid.x] = vec4f(ray.radiance, ray.transmittance);
         part_stopped[lid.x] = u32(ray.stopped);
+        part_entry[lid.x] = ray.layer_entry;
     }
     workgroupBarrier();
     if (marched && part == 0u) {
@@ -165,20 +162,12 @@ fn ambient(@builtin(local_invocation_id) lid: vec3u, @builtin(workgroup_id) wg: 
             + lobes.count.x * henyey_greenstein(c, lobes.g.x)
             + lobes.count.y * henyey_greenstein(c, lobes.g.y);
         weight = cos_n / density;
-        // The parts front to back, up to the first that stopped (its estimate of the rest of
-        // the ray stands for everything behind it).
+        // The parts front to back (join_parts), up to the first that stopped.
         var ray = march_layer_none();
         for (var k = 0u; k < AMBIENT_PARTS; k++) {
             let p = part_light[lid.x + k];
-            ray.radiance += ray.transmittance * p.rgb;
-            ray.transmittance *= p.a;
-            if (part_stopped[lid.x + k] != 0u) {
-                break;
-            }
+            ray = join_parts(ray, MarchRay(p.rgb, p.a, 0.0, 0.0, 0u, part_entry[lid.x + k], part_stopped[lid.x + k] != 0u));
         }
-        // Where the ray enters the main layer, for the cirrus's order (as march_ray has it).
-        let seg = medium_segments(cam, dir, u.layer.w);
-        ray.layer_entry = select(-1.0, seg.a.x, seg.count > 0u);
         ray = with_cirrus(ray, cam, dir, u.layer.w);
         sum = weight * vec4f(ray.radiance, ray.transmittance);
     }

@@ -476,6 +476,33 @@ fn march_layer(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32
     return MarchRay(radiance, transmittance, cloud_depth, front_depth, samples, layer_entry, stopped);
 }
 
+// A ray that met nothing: no light, full transmittance (the start of join_parts).
+fn march_layer_none() -> MarchRay {
+    return MarchRay(vec3f(0.0), 1.0, 0.0, 0.0, 0u, -1.0, false);
+}
+
+// Two consecutive ranges of one ray's march put together, front to back (march_layer): the
+// back one seen through the front's transmittance, the cloud depth weighted by each one's
+// share of the opacity; a front that stopped at the cutoff already holds its estimate of all
+// that lies behind it. The layer entry is the ray's, the same in every range.
+fn join_parts(front: MarchRay, back: MarchRay) -> MarchRay {
+    if (front.stopped) {
+        return front;
+    }
+    var ray = back;
+    let o_front = 1.0 - front.transmittance;
+    let o_back = front.transmittance * (1.0 - back.transmittance);
+    ray.cloud_depth = 0.0;
+    if (o_front + o_back > 0.0) {
+        ray.cloud_depth = (o_front * front.cloud_depth + o_back * back.cloud_depth) / (o_front + o_back);
+    }
+    ray.radiance = front.radiance + front.transmittance * back.radiance;
+    ray.transmittance = front.transmittance * back.transmittance;
+    ray.front_depth = select(back.front_depth, front.front_depth, front.front_depth > 0.0);
+    ray.samples = front.samples + back.samples;
+    return ray;
+}
+
 // The high layer added to a main-layer march: in front of or behind the main layer depending
 // on where it is crossed.
 fn with_cirrus(layer: MarchRay, cam: vec3f, dir: vec3f, max_t: f32) -> MarchRay {
