@@ -58,7 +58,9 @@ pub enum ColorTargets<'a> {
     /// Read the scene color (`TEXTURE_BINDING`) and write `out = scene * T + L` to a separate
     /// output of the same size: `RENDER_ATTACHMENT` (a fullscreen triangle), or
     /// `STORAGE_BINDING` in `Rgba8Unorm`, `Rgba16Float` or `Rgba32Float` (a compute pass,
-    /// chosen whenever the output allows it: much faster on compute-oriented GPUs).
+    /// chosen whenever the output allows it: much faster on compute-oriented GPUs). An output
+    /// texture with `STORAGE_BINDING` must be viewed in its own format (a storage binding
+    /// cannot reinterpret it, e.g. as sRGB; wgpu's refusal comes back as `Error::Gpu`).
     Separate {
         /// The host's rendered scene.
         scene: &'a wgpu::TextureView,
