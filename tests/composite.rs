@@ -5,7 +5,7 @@
 //! pixels outside the viewport as they were. An output neither path can write is refused.
 
 mod common;
-use common::{halfs, quiet, rgba, setup, small_noise, H, W};
+use common::{halfs, quiet, rgba, setup, small_noise, upload, H, W};
 
 use nimbus::demo::standard_views;
 use nimbus::device::{read_texture, texture_2d};
@@ -16,19 +16,6 @@ use wgpu::TextureFormat as F;
 use wgpu::TextureUsages as U;
 
 const OUTSIDE: [f32; 4] = [0.9, 0.1, 0.1, 1.0];
-
-fn upload(queue: &wgpu::Queue, texture: &wgpu::Texture, bytes: &[u8], bpp: u32) {
-    queue.write_texture(
-        texture.as_image_copy(),
-        bytes,
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(texture.width() * bpp),
-            rows_per_image: Some(texture.height()),
-        },
-        texture.size(),
-    );
-}
 
 /// One frame of the ridge view (scene depth in front of part of the clouds) on the right half
 /// of 2W x H targets into `output`, whose left half holds OUTSIDE; returns its pixels.

@@ -4,7 +4,7 @@
 //! stay exactly as they were; bad rectangles are refused.
 
 mod common;
-use common::{halfs, quiet, rgba, setup, small_noise, H, W};
+use common::{halfs, quiet, rgba, setup, small_noise, upload, H, W};
 
 use nimbus::demo::standard_views;
 use nimbus::device::{read_texture, texture_2d};
@@ -24,19 +24,6 @@ fn depth_at(x: u32) -> f32 {
     } else {
         1.0
     }
-}
-
-fn upload(queue: &wgpu::Queue, texture: &wgpu::Texture, bytes: &[u8], bpp: u32) {
-    queue.write_texture(
-        texture.as_image_copy(),
-        bytes,
-        wgpu::TexelCopyBufferLayout {
-            offset: 0,
-            bytes_per_row: Some(texture.width() * bpp),
-            rows_per_image: Some(texture.height()),
-        },
-        texture.size(),
-    );
 }
 
 #[test]

@@ -70,3 +70,17 @@ pub fn rgba(bytes: &[u8]) -> Vec<[f32; 4]> {
         })
         .collect()
 }
+
+/// Writes `bytes` (`bpp` bytes a texel, rows packed) into the whole of mip 0 of `texture`.
+pub fn upload(queue: &wgpu::Queue, texture: &wgpu::Texture, bytes: &[u8], bpp: u32) {
+    queue.write_texture(
+        texture.as_image_copy(),
+        bytes,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(texture.width() * bpp),
+            rows_per_image: Some(texture.height()),
+        },
+        texture.size(),
+    );
+}
