@@ -123,3 +123,19 @@ fn column_ambient_share(above: f32, below: f32, g: f32) -> f32 {
     let transport = 1.0 - clamp(g, 0.0, 0.999);
     return (transport * below + 2.0 / 3.0) / (transport * (above + below) + 4.0 / 3.0);
 }
+
+// The share of `ambient_top` in the ambient light a sample scatters toward the camera, whose
+// view ray (from the camera) has cosine `mu_view` with the local vertical. The same Eddington
+// solution's radiance is I0 + I1 mu, with the net flux term I1 = -(L_top - L_bottom) /
+// ((1 - g)(above + below) + 4/3) along the upward axis (Fick's law in transport depth); any
+// phase function with first moment g scatters it toward the camera (direction -dir) as
+// I0 + g I1 (-mu_view): share + g mu_view / ((1 - g)(above + below) + 4/3), clamped to [0, 1].
+// A thin wisp seen from above shows mostly the light from below (its phase scatters forward
+// what travels up), one seen from below the sky's: 1/2 -+ 3g/4 |mu| in the thin limit, the
+// view-independent share deep in a thick cloud, and the mean over all views is the share.
+// Mirrors seen_ambient_share in src/lighting/diffusion.rs.
+fn seen_ambient_share(above: f32, below: f32, g: f32, mu_view: f32) -> f32 {
+    let gc = clamp(g, 0.0, 0.999);
+    let depth = (1.0 - gc) * (above + below) + 4.0 / 3.0;
+    return clamp(column_ambient_share(above, below, g) + gc * mu_view / depth, 0.0, 1.0);
+}

@@ -212,13 +212,14 @@ fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, sigma_t: f32, tau_view: f32,
     // the horizon (no seam at the horizon).
     let seen = min(column, tau_view * max(mu_view, 0.0));
     var below = mix(column, seen, smoothstep(0.0, 0.25, mu_view));
-    // The ambient's share of the sky above (column_ambient_share) is the column's own, the same
-    // from every side: its bottom before the view-dependent bound below; its top the light
+    // The ambient's share of the sky above (column_ambient_share) is the column's own, seen
+    // through the phase's first moment from the view's side (seen_ambient_share, the
+    // diffusion's flux term): its bottom before the view-dependent bound below; its top the light
     // march's depth projected on the vertical, but no more than the column as dense as the
     // sample up to the layer's top (in the planet's shadow the light march returns 1e4, and
     // under a low sun mu0 is clamped at DE_MIN_MU0 while the slant path keeps growing).
     let top_column = max(u.layer.y - altitude(p, u.planet.xyz, u.planet.w), 0.0) * sigma_t;
-    let ambient_share = column_ambient_share(min(tau_sun * mu0, top_column), below, g);
+    let ambient_share = seen_ambient_share(min(tau_sun * mu0, top_column), below, g, mu_view);
     // Looking toward the sun, the camera sees the cloud's dark side: light escapes there through
     // the boundary the view ray came in by, however the cloud is shaped, so that boundary is no
     // farther than the ray's own optical depth (for a slab, never closer than the column: no

@@ -250,6 +250,23 @@ pub fn column_ambient_share(above: f32, below: f32, g: f32) -> f32 {
     (transport * below + 2.0 / 3.0) / (transport * (above + below) + 4.0 / 3.0)
 }
 
+/// The share of `ambient_top` in the ambient light a sample scatters toward a camera whose
+/// view ray (from the camera) has cosine `mu_view` with the vertical. The Eddington radiance of
+/// [`column_ambient_share`]'s column is I0 + I1 μ with the net flux term
+/// I1 = -(L_top - L_bottom) / ((1 - g)(above + below) + 4/3) along the upward axis (Fick's law
+/// in transport depth, the gradient of I0); any phase function with first moment g scatters
+/// it toward the camera as I0 + g I1 (-mu_view), so the share is
+/// `column_ambient_share + g mu_view / ((1 - g)(above + below) + 4/3)`, clamped to [0, 1]:
+/// 1/2 + 3g/4 mu_view in a thin wisp (a wisp seen from above shows the light from below,
+/// which its phase scatters forward), the view-independent share deep in a thick cloud, and
+/// over all views on average the share itself. `shaders/diffusion.wgsl`'s
+/// `seen_ambient_share` mirrors it.
+pub fn seen_ambient_share(above: f32, below: f32, g: f32, mu_view: f32) -> f32 {
+    let gc = g.clamp(0.0, 0.999);
+    let depth = (1.0 - gc) * (above + below) + 4.0 / 3.0;
+    (column_ambient_share(above, below, g) + gc * mu_view / depth).clamp(0.0, 1.0)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -564,6 +581,73 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// In a thin wisp the ambient seen is single scattering of the two-hemisphere sky: the
+    /// share of the phase's weight on light that travels down (from the sky above) into the
+    /// camera's direction. Integrated here over the sphere for the P1 phase (1 + 3g cos)/4π,
+    /// whose first moment is g, against the closed form's thin limit.
+    #[test]
+    fn a_thin_wisp_shows_the_phase_weighted_sky() {
+        let n = 400;
+        for g in [0.0f64, 0.3, 0.6] {
+            for mu_view in [-0.9f64, -0.4, 0.0, 0.5, 1.0] {
+                // The direction toward the camera, -dir, in the x-z plane (z up).
+                let sin = (1.0 - mu_view * mu_view).sqrt();
+                let out = [-sin, 0.0, -mu_view];
+                let mut from_sky = 0.0;
+                for i in 0..n {
+                    let cos_t = -1.0 + 2.0 * (i as f64 + 0.5) / n as f64;
+                    let sin_t = (1.0 - cos_t * cos_t).sqrt();
+                    for j in 0..n {
+                        let phi = 2.0 * std::f64::consts::PI * (j as f64 + 0.5) / n as f64;
+                        let w = [sin_t * phi.cos(), sin_t * phi.sin(), cos_t];
+                        if w[2] >= 0.0 {
+                            continue; // travels up: from the ground below
+                        }
+                        let c = w[0] * out[0] + w[1] * out[1] + w[2] * out[2];
+                        let d_omega = 4.0 * std::f64::consts::PI / (n * n) as f64;
+                        from_sky += (1.0 + 3.0 * g * c) / (4.0 * std::f64::consts::PI) * d_omega;
+                    }
+                }
+                let closed = seen_ambient_share(0.0, 0.0, g as f32, mu_view as f32) as f64;
+                assert!(
+                    (closed - from_sky.clamp(0.0, 1.0)).abs() < 2e-3,
+                    "g {g}, mu {mu_view}: {closed} vs {from_sky}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn the_seen_share_averages_to_the_columns_and_fades_with_depth() {
+        for (above, below) in [(2.0f32, 3.0f32), (3.0, 2.0), (40.0, 10.0)] {
+            let share = column_ambient_share(above, below, 0.85);
+            let n = 2000;
+            let mean = (0..n)
+                .map(|i| {
+                    let mu = -1.0 + 2.0 * (i as f32 + 0.5) / n as f32;
+                    seen_ambient_share(above, below, 0.85, mu)
+                })
+                .sum::<f32>()
+                / n as f32;
+            // Unclamped, the views' mean is the share: the flux term moves light, adds none.
+            assert!(
+                (mean - share).abs() < 1e-4,
+                "{above} {below}: {mean} vs {share}"
+            );
+        }
+        // Deep in a thick cloud every view sees the same share; from below a thin one shows
+        // more sky, from above less.
+        let thick = |mu| seen_ambient_share(200.0, 200.0, 0.85, mu);
+        assert!((thick(1.0) - thick(-1.0)).abs() < 0.03);
+        let thin = |mu| seen_ambient_share(0.1, 0.1, 0.85, mu);
+        assert!(
+            thin(0.8) > 0.9 && thin(-0.8) < 0.1,
+            "{} {}",
+            thin(0.8),
+            thin(-0.8)
+        );
     }
 
     #[test]
