@@ -25,7 +25,9 @@
 // Each ray is marched in AMBIENT_PARTS consecutive ranges of its steps, one per invocation
 // (march_layer, shaders/march_ray.wgsl), put together front to back in workgroup memory: the
 // pass is a few hundred invocations, so its time on a GPU is one ray's chain of dependent
-// samples, which the parts cut eightfold (docs/performance.md).
+// samples, which the parts shorten (0.38 -> 0.16 ms on an NVIDIA H200: each part first sums
+// its range's optical depth along the view, and a workgroup waits for its slowest part;
+// docs/performance.md).
 
 // Per hemisphere (0 above, 1 below): rgb E_clouds (the sun's units × sr), a V.
 @group(0) @binding(13) var<storage, read_write> ambient_out: array<vec4f, 2>;
