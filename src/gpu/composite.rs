@@ -244,11 +244,12 @@ impl CompositeCache {
         if mode == CompositeMode::Compute {
             views.push(output);
         }
-        let layout = match &composite.pipeline {
-            CompositePipeline::Render(p) => p.get_bind_group_layout(0),
-            CompositePipeline::Compute(p) => p.get_bind_group_layout(0),
-        };
-        let bind = composite.binds.get(inputs.uniforms, &views, || {
+        let Composite { pipeline, binds } = composite;
+        let bind = binds.get(inputs.uniforms, &views, || {
+            let layout = match &*pipeline {
+                CompositePipeline::Render(p) => p.get_bind_group_layout(0),
+                CompositePipeline::Compute(p) => p.get_bind_group_layout(0),
+            };
             let mut entries = vec![
                 tex(0, inputs.clouds),
                 tex(2, inputs.cloud_depth),
@@ -271,7 +272,7 @@ impl CompositeCache {
             })
         });
         let [x, y, w, h] = inputs.viewport;
-        match &composite.pipeline {
+        match &*pipeline {
             CompositePipeline::Compute(pipeline) => timed_dispatch(
                 encoder,
                 "nimbus composite",
