@@ -53,17 +53,6 @@ fn gpu_table(rows: &[(&str, &Cost)]) -> String {
     md
 }
 
-/// The default level with no cloud anywhere.
-fn no_clouds_settings(weather: &Weather) -> Settings {
-    let mut s = Settings {
-        weather: weather.clone(),
-        ..Settings::default()
-    };
-    Quality::Medium.apply(&mut s);
-    s.weather = Weather::clear();
-    s
-}
-
 /// Measures the breakdown (sparse, ground view, default level, settled) at `size`; returns the
 /// markdown section (also printed).
 pub fn profile_section(size: (u32, u32)) -> Result<String, String> {
@@ -81,12 +70,13 @@ pub fn profile_section(size: (u32, u32)) -> Result<String, String> {
     let mut one_light = medium();
     one_light.lighting.light_steps = 1;
     let one_light = cost(&mut h, one_light)?;
-    let no_clouds = no_clouds_settings(&weather);
-    let no_clouds = cost(&mut h, no_clouds.clone())?;
+    let mut clear = medium();
+    clear.weather = Weather::clear();
+    let no_clouds = cost(&mut h, clear.clone())?;
     // The same clear frame with the output a render-pass-only target: the composite as a
     // fullscreen triangle instead of a compute pass (what a host gets without STORAGE_BINDING).
     h.set_storage_output(false).map_err(|e| e.to_string())?;
-    let render_composite = cost(&mut h, no_clouds_settings(&weather))?;
+    let render_composite = cost(&mut h, clear)?;
     h.set_storage_output(true).map_err(|e| e.to_string())?;
 
     let light = (full.0 - one_light.0).max(0.0);
