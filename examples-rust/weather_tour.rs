@@ -101,7 +101,7 @@ fn run() -> Result<(), String> {
     std::fs::create_dir_all(&out).map_err(|e| format!("{}: {e}", out.display()))?;
 
     // The sheet jumps from preset to preset: each map at once, in its request, so that every
-    // row's frames see its weather from the first (a game's requests take 8 frames instead).
+    // row's frames see its weather from the first (a game's requests take 16 frames instead).
     let mut h = Headless::new(Settings {
         weather_map_texels_per_frame: 0,
         ..Settings::default()

@@ -221,7 +221,7 @@
 #define NIMBUS_QUALITY_LOW 1
 
 /*
- Full-resolution grid, one pixel in 16 traced per frame (the default).
+ Half-resolution grid, one pixel in 16 traced per frame, 48-96 steps (the default).
  */
 #define NIMBUS_QUALITY_MEDIUM 2
 
@@ -1282,7 +1282,7 @@ NimbusResult nimbus_context_resize(struct NimbusContext *ctx, uint32_t width, ui
  option flags) at host time `start` seconds, lasting `duration` seconds (0 = at once). A
  transition already running is frozen where it is and continued from, so the sky never
  jumps. Requests must come in time order.
- The preset's weather map is generated a slice per frame (8 frames at the default size),
+ The preset's weather map is generated a slice per frame (16 frames at the default size),
  so the request costs no frame a hitch: until it is ready `nimbus_context_weather_state`
  says `NIMBUS_TRANSITION_PENDING`, then the transition starts at the later of `start` and
  that frame's time. Requests made meanwhile wait their turn, in order.

@@ -616,7 +616,7 @@ impl Renderer {
     ///
     /// The new weather's map is generated on the GPU. When it has more texels than
     /// [`Settings::weather_map_texels_per_frame`] (the default 512² map does), it is generated
-    /// a slice per [`Renderer::prepare`] (8 frames by default), so that no frame pays for the
+    /// a slice per [`Renderer::prepare`] (16 frames by default), so that no frame pays for the
     /// whole map, and the request enters the timeline once the map is ready: the transition
     /// starts at the later of `start` and that frame's time, and until then
     /// [`Renderer::weather_state`] says [`TransitionPhase::Pending`](crate::weather::TransitionPhase::Pending).

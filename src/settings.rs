@@ -36,7 +36,9 @@ pub struct Settings {
     /// 0.2 s on a 2-core software rasteriser); the transition then starts once the map is
     /// ready, at the later of its requested start and that frame's time. A map that fits
     /// (or 0 = no limit) is generated at once in the request, which the transition then
-    /// starts exactly at. Default 32768: a 512² map over 8 frames, a 128² one at once.
+    /// starts exactly at. Default 16384: a 512² map over 16 frames, a 128² one at once (a slice
+    /// then costs about 3% of a default frame at 1280×720 on software Vulkan; at 32768 the worst
+    /// frame of a request was 1.12× a normal one once the default level traced a half grid).
     pub weather_map_texels_per_frame: u32,
 }
 
@@ -166,8 +168,10 @@ pub struct Lighting {
     /// Length in meters the light march covers (clipped to the shell). Default 3 000.
     pub light_distance: f32,
     /// Each light step is this many times as long as the one before, in [1, 4] (1: uniform).
-    /// Default 1.6: with 8 steps over 3 km the first is 43 m long and the last 1.1 km. Short
-    /// first steps resolve the self-shadowing next to the sample, which dominates the look.
+    /// Default 1.4: with 8 steps over 3 km the first is 87 m long and the last 920 m. Short
+    /// first steps resolve the self-shadowing next to the sample, which dominates the look;
+    /// against the converged reference 1.4 scored better than 1.6 on every benchmark scene
+    /// at the same cost (docs/performance.md).
     pub light_step_growth: f32,
     /// Fewer, longer light steps far away: one step fewer per doubling of the distance beyond
     /// 5 km (at least 2), covering the same length. Default true.
@@ -190,7 +194,8 @@ pub struct March {
     /// Blue-noise jitter of the ray start (against banding). Default true.
     pub jitter: bool,
     /// Resolution the clouds are traced at; the composite upsamples depth-aware.
-    /// Default full.
+    /// Default half (one ray per 2×2 output pixels): on software Vulkan a third of the full
+    /// grid's frame for +0.001-0.005 FLIP against the converged reference (docs/performance.md).
     pub resolution: TraceResolution,
     /// Temporal reprojection: trace a subset of pixels each frame and accumulate the rest
     /// from reprojected history. Default on, one pixel in 16.
@@ -320,8 +325,8 @@ pub enum Quality {
     /// Half-resolution grid, one pixel in 16 traced per frame, 32-64 march steps, 6 light
     /// steps (growth 2); every optimisation on.
     Low,
-    /// Full-resolution grid, one pixel in 16 traced per frame, 48-96 march steps, 8 light
-    /// steps (growth 1.6); every optimisation on. The default.
+    /// Half-resolution grid, one pixel in 16 traced per frame, 48-96 march steps, 8 light
+    /// steps (growth 1.4); every optimisation on. The default.
     Medium,
     /// Full-resolution grid, one pixel in 4 traced per frame, 64-128 march steps, 10 light
     /// steps (growth 1.5); every optimisation on.
@@ -343,7 +348,7 @@ impl Quality {
         use TraceResolution as R;
         let (resolution, pattern, min, max, light, growth) = match self {
             Quality::Low => (R::Half, P::OneIn16, 32, 64, 6, 2.0),
-            Quality::Medium => (R::Full, P::OneIn16, 48, 96, 8, 1.6),
+            Quality::Medium => (R::Half, P::OneIn16, 48, 96, 8, 1.4),
             Quality::High => (R::Full, P::OneIn4, 64, 128, 10, 1.5),
             Quality::Ultra => (R::Full, P::Every, 64, 128, 12, 1.4),
         };
@@ -455,7 +460,7 @@ impl Default for Lighting {
             multiple_scattering: MultipleScattering::default(),
             light_steps: 8,
             light_distance: 3_000.0,
-            light_step_growth: 1.6,
+            light_step_growth: 1.4,
             light_lod: true,
         }
     }
@@ -469,7 +474,7 @@ impl Default for March {
             max_distance: 120_000.0,
             transmittance_cutoff: 0.01,
             jitter: true,
-            resolution: TraceResolution::Full,
+            resolution: TraceResolution::Half,
             temporal: Temporal::default(),
             coarse_then_fine: true,
             distance_steps: true,
@@ -499,7 +504,7 @@ impl Default for Settings {
             haze: Haze::default(),
             debug_density: DebugDensity::Off,
             shadows: CloudShadows::default(),
-            weather_map_texels_per_frame: 32_768,
+            weather_map_texels_per_frame: 16_384,
         }
     }
 }

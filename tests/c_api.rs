@@ -75,7 +75,11 @@ fn c_programs_pass_and_match_the_rust_render() {
         .expect("headless.png")
         .to_rgba8();
     assert_eq!(c_png.dimensions(), (w, h));
-    let mut r = Headless::new(quiet(Settings::default())).unwrap();
+    // The C host keeps the default level's trace grid (it renders 16 frames of one pixel in 16,
+    // jitter off: every grid pixel traced once, as one frame with temporal reuse off).
+    let mut settings = quiet(Settings::default());
+    settings.march.resolution = Settings::default().march.resolution;
+    let mut r = Headless::new(settings).unwrap();
     r.resize(w, h).unwrap();
     r.upload_scene(&vec![[0.2, 0.35, 0.7, 1.0]; (w * h) as usize], None)
         .unwrap();

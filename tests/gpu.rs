@@ -420,8 +420,10 @@ fn slab_closed_form(radius: f32) {
     settings.march.min_steps = 256;
     settings.march.max_steps = 256;
     settings.march.transmittance_cutoff = 0.0;
-    // Every pixel traced in this one frame: the closed form is checked per pixel.
+    // Every pixel traced in this one frame, on the full grid: the closed form is checked per
+    // pixel.
     settings.march.temporal = nimbus::Temporal::OFF;
+    settings.march.resolution = nimbus::settings::TraceResolution::Full;
     let phase = settings.lighting.phase;
     let mut h = headless(settings);
 

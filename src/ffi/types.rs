@@ -135,7 +135,7 @@ pub const NIMBUS_JITTER_OFF: u32 = 2;
 pub const NIMBUS_QUALITY_DEFAULT: u32 = 0;
 /// Half-resolution grid, one pixel in 16 traced per frame, short marches.
 pub const NIMBUS_QUALITY_LOW: u32 = 1;
-/// Full-resolution grid, one pixel in 16 traced per frame (the default).
+/// Half-resolution grid, one pixel in 16 traced per frame, 48-96 steps (the default).
 pub const NIMBUS_QUALITY_MEDIUM: u32 = 2;
 /// Full-resolution grid, one pixel in 4 traced per frame, longer marches.
 pub const NIMBUS_QUALITY_HIGH: u32 = 3;

@@ -1,7 +1,7 @@
 //! Helpers shared by the GPU test files.
 #![allow(dead_code)]
 
-use nimbus::settings::NoiseSettings;
+use nimbus::settings::{NoiseSettings, TraceResolution};
 use nimbus::{Headless, Settings, Temporal};
 
 pub const W: u32 = 160;
@@ -39,10 +39,12 @@ pub fn small_noise(seed: u32) -> Settings {
 }
 
 /// Settings for comparing single frames: the blue-noise jitter rotates every frame, so it is
-/// off, and every pixel is traced every frame (no temporal reprojection).
+/// off, and every pixel is traced every frame (no temporal reprojection) on the full-resolution
+/// grid (the default level traces a half grid), so a pixel of `read_clouds` is one ray.
 pub fn quiet(mut s: Settings) -> Settings {
     s.march.jitter = false;
     s.march.temporal = Temporal::OFF;
+    s.march.resolution = TraceResolution::Full;
     s
 }
 
