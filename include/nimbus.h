@@ -216,7 +216,7 @@
 #define NIMBUS_QUALITY_DEFAULT 0
 
 /*
- Half-resolution grid, one pixel in 16 traced per frame, short marches.
+ Quarter-resolution grid, one pixel in 16 traced per frame, 48-96 steps.
  */
 #define NIMBUS_QUALITY_LOW 1
 

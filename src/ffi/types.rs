@@ -133,7 +133,7 @@ pub const NIMBUS_JITTER_OFF: u32 = 2;
 
 /// Quality level: the default (medium).
 pub const NIMBUS_QUALITY_DEFAULT: u32 = 0;
-/// Half-resolution grid, one pixel in 16 traced per frame, short marches.
+/// Quarter-resolution grid, one pixel in 16 traced per frame, 48-96 steps.
 pub const NIMBUS_QUALITY_LOW: u32 = 1;
 /// Half-resolution grid, one pixel in 16 traced per frame, 48-96 steps (the default).
 pub const NIMBUS_QUALITY_MEDIUM: u32 = 2;
