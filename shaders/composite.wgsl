@@ -43,39 +43,73 @@ fn full_scene_distance(pixel: vec2u) -> f32 {
     return scene_distance_at(cu.inv_view_proj_rel, cu.depth.x, pixel_ndc(pixel, dims), load_scene_depth(pixel));
 }
 
-// (L, T) for a full-resolution pixel.
+// One trace-grid sample as the upsample reads it.
+struct Tap {
+    value: vec4f,  // (L, T)
+    cloud: f32,    // the cloud's distance (m; 0 = no cloud)
+    log_clip: f32, // log of the scene distance its ray was clipped at (at least 1 m)
+}
+
+fn load_tap(c: vec2i) -> Tap {
+    let d = textureLoad(cloud_depth, c, 0).rg;
+    return Tap(textureLoad(clouds, c, 0), d.x, log(max(d.y, 1.0)));
+}
+
+// The weight of a sample for a full-resolution pixel at scene distance `d_full` (log:
+// `log_full`), whose bilinear weight is `bilinear`.
+fn tap_weight(t: Tap, bilinear: f32, d_full: f32, log_full: f32) -> f32 {
+    // A cloud behind this pixel's own occluder is not visible here.
+    if (t.cloud > 0.0 && t.cloud > d_full) {
+        return 0.0;
+    }
+    // Samples clipped at a very different scene distance belong to another surface.
+    return (bilinear + 1e-4) / (1e-3 + abs(t.log_clip - log_full));
+}
+
+// (L, T) at full-resolution pixel `pixel` from the four samples around it (t_xy: x, y the
+// sample's offset from the lower one; `f` the pixel's bilinear fractions between them).
+fn upsample(t00: Tap, t10: Tap, t01: Tap, t11: Tap, f: vec2f, pixel: vec2u) -> vec4f {
+    // Four samples with no cloud: any weighting, and dropping any of them, gives (0, 1), and
+    // a GPU that branches skips the pixel's scene distance (clear sky, the ground below the
+    // horizon: most of a frame).
+    let none = vec4f(0.0, 0.0, 0.0, 1.0);
+    if (all(t00.value == none) && all(t10.value == none) && all(t01.value == none) && all(t11.value == none)) {
+        return none;
+    }
+    let d_full = full_scene_distance(pixel);
+    let log_full = log(max(d_full, 1.0));
+    let w00 = tap_weight(t00, (1.0 - f.x) * (1.0 - f.y), d_full, log_full);
+    let w10 = tap_weight(t10, f.x * (1.0 - f.y), d_full, log_full);
+    let w01 = tap_weight(t01, (1.0 - f.x) * f.y, d_full, log_full);
+    let w11 = tap_weight(t11, f.x * f.y, d_full, log_full);
+    let total = w00 + w10 + w01 + w11;
+    if (total <= 0.0) {
+        return none;
+    }
+    return (w00 * t00.value + w10 * t10.value + w01 * t01.value + w11 * t11.value) / total;
+}
+
+// (L, T) for a full-resolution pixel. The four samples are named, not an indexed array: a
+// SIMD rasterizer (llvmpipe) keeps such an array in scratch memory, one access per lane.
 fn fetch_clouds(pixel: vec2u) -> vec4f {
     let scale = cu.params.x;
     if (scale <= 1.0) {
         return textureLoad(clouds, pixel, 0);
     }
-    let low = vec2i(textureDimensions(clouds));
-    let d_full = full_scene_distance(pixel);
-    // Position in trace pixels, and the four nearest samples with bilinear weights.
+    let last = vec2i(textureDimensions(clouds)) - vec2i(1);
+    // Position in trace pixels: the samples below and above it, and the fractions between.
     let q = (vec2f(pixel) + 0.5) / scale - 0.5;
-    let base = vec2i(floor(q));
     let f = q - floor(q);
-    var sum = vec4f(0.0);
-    var total = 0.0;
-    for (var k = 0; k < 4; k++) {
-        let o = vec2i(k & 1, k >> 1);
-        let c = clamp(base + o, vec2i(0), low - vec2i(1));
-        let bilinear = select(1.0 - f.x, f.x, o.x == 1) * select(1.0 - f.y, f.y, o.y == 1);
-        let depths = textureLoad(cloud_depth, c, 0).rg;
-        // A cloud behind this pixel's own occluder is not visible here.
-        if (depths.x > 0.0 && depths.x > d_full) {
-            continue;
-        }
-        // Samples clipped at a very different scene distance belong to another surface.
-        let similar = 1.0 / (1e-3 + abs(log(max(depths.y, 1.0)) - log(max(d_full, 1.0))));
-        let w = (bilinear + 1e-4) * similar;
-        sum += w * textureLoad(clouds, c, 0);
-        total += w;
-    }
-    if (total <= 0.0) {
-        return vec4f(0.0, 0.0, 0.0, 1.0);
-    }
-    return sum / total;
+    let lo = clamp(vec2i(floor(q)), vec2i(0), last);
+    let hi = min(vec2i(floor(q)) + vec2i(1), last);
+    return upsample(
+        load_tap(lo),
+        load_tap(vec2i(hi.x, lo.y)),
+        load_tap(vec2i(lo.x, hi.y)),
+        load_tap(hi),
+        f,
+        pixel,
+    );
 }
 
 // In place: the blend state does scene * T + L (src One, dst SrcAlpha; alpha kept).

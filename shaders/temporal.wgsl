@@ -42,11 +42,14 @@ fn scene_viewport() -> vec4f {
 @group(0) @binding(6) var out_clouds: texture_storage_2d<rgba16float, write>;
 @group(0) @binding(7) var out_depth: texture_storage_2d<rgba32float, write>;
 
-// Scene distances this close in log space belong to the same surface.
-const SAME_SURFACE: f32 = 0.1;
+// Scene distances this close in log space (0.1) belong to the same surface: compared as a
+// ratio, e^0.1, which spares the resolve eight pairs of logarithms per pixel.
+const SAME_SURFACE_RATIO: f32 = 1.10517092;
 
 fn same_surface(a: f32, b: f32) -> bool {
-    return abs(log(max(a, 1.0)) - log(max(b, 1.0))) < SAME_SURFACE;
+    let x = max(a, 1.0);
+    let y = max(b, 1.0);
+    return max(x, y) < SAME_SURFACE_RATIO * min(x, y);
 }
 
 fn scene_distance_of(p: vec2u, grid: vec2u, ndc: vec2f) -> f32 {

@@ -1020,6 +1020,7 @@ impl Renderer {
                 uniforms: &state.composite_uniforms,
                 timer: self.timer.as_ref(),
                 viewport: checked.rect,
+                divisor: self.settings.march.resolution.divisor(),
             };
             self.composite.record(
                 &device,

@@ -2,7 +2,9 @@
 //! allows storage writes, a fullscreen triangle otherwise. They must give the same picture,
 //! pixel for pixel (the same arithmetic; only the store differs), with the depth-aware
 //! upsample of a half-resolution trace grid and a viewport inside the targets, and leave the
-//! pixels outside the viewport as they were. An output neither path can write is refused.
+//! pixels outside the viewport as they were; the compute pass composites the half grid's 2×2
+//! pixels per invocation, so an odd-sized viewport checks its last column and row. An output
+//! neither path can write is refused.
 
 mod common;
 use common::{halfs, quiet, rgba, setup, small_noise, upload, H, W};
@@ -17,13 +19,15 @@ use wgpu::TextureUsages as U;
 
 const OUTSIDE: [f32; 4] = [0.9, 0.1, 0.1, 1.0];
 
-/// One frame of the ridge view (scene depth in front of part of the clouds) on the right half
-/// of 2W x H targets into `output`, whose left half holds OUTSIDE; returns its pixels.
+/// One frame of the ridge view (scene depth in front of part of the clouds) in a `rect.0` x
+/// `rect.1` viewport at the top left of the right half of 2W x H targets into `output`, which
+/// holds OUTSIDE before; returns its pixels.
 fn composite_into(
     format: F,
     usage: U,
     to_bytes: &dyn Fn(&[[f32; 4]]) -> Vec<u8>,
     bpp: u32,
+    rect: (u32, u32),
 ) -> Vec<[f32; 4]> {
     setup();
     let (device, queue, _) = nimbus::headless::create_device().unwrap();
@@ -86,7 +90,7 @@ fn composite_into(
         depth.create_view(&Default::default()),
         output.create_view(&Default::default()),
     );
-    r.prepare(&view.frame(W, H, 0.0)).unwrap();
+    r.prepare(&view.frame(rect.0, rect.1, 0.0)).unwrap();
     let mut enc = device.create_command_encoder(&Default::default());
     r.encode(
         &mut enc,
@@ -99,8 +103,8 @@ fn composite_into(
             viewport: Some(Viewport {
                 x: W,
                 y: 0,
-                width: W,
-                height: H,
+                width: rect.0,
+                height: rect.1,
             }),
         },
     )
@@ -124,11 +128,19 @@ fn unorm8(pixels: &[[f32; 4]]) -> Vec<u8> {
         .collect()
 }
 
-/// Compares the two paths' pixels: equal within `tolerance`, the left half untouched.
-fn assert_same(compute: &[[f32; 4]], render: &[[f32; 4]], outside: [f32; 4], tolerance: f32) {
+/// Compares the two paths' pixels: equal within `tolerance` inside the `rect` viewport (at
+/// x = W, y = 0), untouched outside it.
+fn assert_same(
+    compute: &[[f32; 4]],
+    render: &[[f32; 4]],
+    outside: [f32; 4],
+    tolerance: f32,
+    rect: (u32, u32),
+) {
     let (mut worst, mut clouds) = (0.0f32, 0);
     for (i, (c, r)) in compute.iter().zip(render).enumerate() {
-        if i as u32 % (2 * W) < W {
+        let (x, y) = (i as u32 % (2 * W), i as u32 / (2 * W));
+        if x < W || x >= W + rect.0 || y >= rect.1 {
             assert_eq!(
                 *c, outside,
                 "compute: pixel {i} outside the viewport changed"
@@ -145,25 +157,33 @@ fn assert_same(compute: &[[f32; 4]], render: &[[f32; 4]], outside: [f32; 4], tol
         }
     }
     println!("compute vs fullscreen triangle: max difference {worst}, {clouds} pixels written");
-    assert!(clouds > W * H / 2, "too few pixels written ({clouds})");
+    assert!(
+        clouds > rect.0 * rect.1 / 2,
+        "too few pixels written ({clouds})"
+    );
     assert!(worst <= tolerance, "the paths differ by {worst}");
 }
 
 #[test]
 fn compute_composite_matches_the_fullscreen_triangle() {
     let f16 = |p: &[[f32; 4]]| halfs(p);
-    let compute = composite_into(F::Rgba16Float, U::STORAGE_BINDING, &f16, 8);
-    let render = composite_into(F::Rgba16Float, U::RENDER_ATTACHMENT, &f16, 8);
     let outside = OUTSIDE.map(|v| half::f16::from_f32(v).to_f32());
-    assert_same(&compute, &render, outside, 1e-3);
+    // The whole right half, and an odd-sized viewport: the half grid's last sample then
+    // stands for one column and one row.
+    for rect in [(W, H), (W - 1, H - 3)] {
+        let compute = composite_into(F::Rgba16Float, U::STORAGE_BINDING, &f16, 8, rect);
+        let render = composite_into(F::Rgba16Float, U::RENDER_ATTACHMENT, &f16, 8, rect);
+        assert_same(&compute, &render, outside, 1e-3, rect);
+    }
 }
 
 #[test]
 fn compute_composite_matches_the_fullscreen_triangle_in_rgba8() {
-    let compute = composite_into(F::Rgba8Unorm, U::STORAGE_BINDING, &unorm8, 4);
-    let render = composite_into(F::Rgba8Unorm, U::RENDER_ATTACHMENT, &unorm8, 4);
+    let rect = (W, H);
+    let compute = composite_into(F::Rgba8Unorm, U::STORAGE_BINDING, &unorm8, 4, rect);
+    let render = composite_into(F::Rgba8Unorm, U::RENDER_ATTACHMENT, &unorm8, 4, rect);
     let outside = OUTSIDE.map(|v| (v * 255.0).round() / 255.0);
-    assert_same(&compute, &render, outside, 1.0 / 255.0 + 1e-6);
+    assert_same(&compute, &render, outside, 1.0 / 255.0 + 1e-6, rect);
 }
 
 #[test]

@@ -62,6 +62,8 @@ pub(crate) struct CompositeInputs<'a> {
     pub timer: Option<&'a super::timing::GpuTimer>,
     /// The rectangle of the output rendered (x, y, width, height).
     pub viewport: [u32; 4],
+    /// The trace resolution's divisor (1, 2 or 4).
+    pub divisor: u32,
 }
 
 /// How the composite writes its output.
@@ -118,7 +120,7 @@ struct Composite {
 
 #[derive(Default)]
 pub(crate) struct CompositeCache {
-    pipelines: HashMap<(wgpu::TextureFormat, CompositeMode, DepthKind), Composite>,
+    pipelines: HashMap<(wgpu::TextureFormat, CompositeMode, DepthKind, bool), Composite>,
 }
 
 fn build(
@@ -126,9 +128,12 @@ fn build(
     format: wgpu::TextureFormat,
     mode: CompositeMode,
     depth: DepthKind,
+    quad: bool,
 ) -> CompositePipeline {
     match mode {
-        CompositeMode::Compute => CompositePipeline::Compute(build_compute(device, format, depth)),
+        CompositeMode::Compute => {
+            CompositePipeline::Compute(build_compute(device, format, depth, quad))
+        }
         _ => CompositePipeline::Render(build_render(
             device,
             format,
@@ -138,10 +143,13 @@ fn build(
     }
 }
 
+/// The compute composite; `quad`: one invocation per 2×2 output pixels, for a half-resolution
+/// trace grid (shaders/composite_compute.wgsl).
 fn build_compute(
     device: &wgpu::Device,
     format: wgpu::TextureFormat,
     depth: DepthKind,
+    quad: bool,
 ) -> wgpu::ComputePipeline {
     let storage = storage_format_name(format)
         .unwrap_or_else(|| unreachable!("compute composite chosen for {format:?}"));
@@ -156,7 +164,10 @@ fn build_compute(
         layout: None,
         module: &module,
         entry_point: Some("cs_separate"),
-        compilation_options: Default::default(),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants: &[("QUAD", if quad { 1.0 } else { 0.0 })],
+            ..Default::default()
+        },
         cache: None,
     })
 }
@@ -228,11 +239,13 @@ impl CompositeCache {
         format: wgpu::TextureFormat,
     ) {
         let mode = CompositeMode::for_output(scene.is_none(), output);
+        // The half grid's 2×2 pixels per invocation: the default level's composite.
+        let quad = mode == CompositeMode::Compute && inputs.divisor == 2;
         let composite = self
             .pipelines
-            .entry((format, mode, inputs.depth_kind))
+            .entry((format, mode, inputs.depth_kind, quad))
             .or_insert_with(|| Composite {
-                pipeline: build(device, format, mode, inputs.depth_kind),
+                pipeline: build(device, format, mode, inputs.depth_kind, quad),
                 binds: BindCache::default(),
             });
         let tex = |binding, view| wgpu::BindGroupEntry {
@@ -278,7 +291,11 @@ impl CompositeCache {
                 "nimbus composite",
                 pipeline,
                 &bind,
-                (w, h),
+                if quad {
+                    (w.div_ceil(2), h.div_ceil(2))
+                } else {
+                    (w, h)
+                },
                 inputs.timer,
                 super::timing::Pass::Composite,
             ),
@@ -315,7 +332,8 @@ impl CompositeCache {
         }
     }
 
-    /// How many pipelines have been built (one per output format, mode and depth kind used).
+    /// How many pipelines have been built (one per output format, mode, depth kind and, for the
+    /// compute composite, whether it runs 2×2 pixels per invocation).
     pub(crate) fn len(&self) -> usize {
         self.pipelines.len()
     }
