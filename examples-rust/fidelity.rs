@@ -215,6 +215,7 @@ fn reference_cache(
     // by today's defaults, so that retuning the default level keeps the traced references.
     key.march = March {
         resolution: TraceResolution::Full,
+        transmittance_cutoff: 0.01,
         ..March::default()
     };
     key.lighting.light_steps = 8;
