@@ -2,8 +2,9 @@
 //! In place, a fullscreen triangle's blend does the multiply-add on the host's color;
 //! otherwise the shader reads the scene and writes the output: by a compute pass when the
 //! output allows storage writes (`STORAGE_BINDING` and a format in `STORAGE_OUTPUT_FORMATS`),
-//! else by a fullscreen triangle. Pipelines are cached per (output format, mode, scene-depth
-//! kind) on first use.
+//! else by a fullscreen triangle. On a half-resolution trace grid the compute pass runs one
+//! invocation per 2×2 output pixels, which share the 3×3 trace samples around one. Pipelines
+//! are cached per (output format, mode, scene-depth kind, 2×2 or not) on first use.
 
 use std::collections::HashMap;
 
