@@ -86,7 +86,12 @@ fn upsample(t00: Tap, t10: Tap, t01: Tap, t11: Tap, f: vec2f, pixel: vec2u) -> v
     if (total <= 0.0) {
         return none;
     }
-    return (w00 * t00.value + w10 * t10.value + w01 * t01.value + w11 * t11.value) / total;
+    // A sample with no weight adds nothing, even an infinite one (0 × inf is NaN).
+    let sum = select(vec4f(0.0), w00 * t00.value, w00 > 0.0)
+        + select(vec4f(0.0), w10 * t10.value, w10 > 0.0)
+        + select(vec4f(0.0), w01 * t01.value, w01 > 0.0)
+        + select(vec4f(0.0), w11 * t11.value, w11 > 0.0);
+    return sum / total;
 }
 
 // (L, T) for a full-resolution pixel. The four samples are named, not an indexed array: a

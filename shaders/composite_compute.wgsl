@@ -12,10 +12,12 @@
 // (9 samples for 4 pixels instead of 16, the same values and weights as one pixel at a time).
 override QUAD: bool = false;
 
+fn inside(local: vec2u) -> bool {
+    return all(local < vec2u(cu.viewport.zw));
+}
+
+// Writes scene * T + L at `local`, a pixel inside the viewport.
 fn composite_pixel(local: vec2u, clouds_here: vec4f) {
-    if (any(local >= vec2u(cu.viewport.zw))) {
-        return;
-    }
     let pixel = local + vec2u(cu.viewport.xy);
     let s = textureLoad(scene, pixel, 0);
     textureStore(output, pixel, vec4f(s.rgb * clouds_here.a + clouds_here.rgb, s.a));
@@ -25,7 +27,7 @@ fn composite_pixel(local: vec2u, clouds_here: vec4f) {
 // at 3/4 for i = 0, between x and x + 1 at 1/4 for i = 1 (fetch_clouds with scale 2).
 fn composite_quad(id: vec2u) {
     let local = id * 2u;
-    if (any(local >= vec2u(cu.viewport.zw))) {
+    if (!inside(local)) {
         return;
     }
     let last = vec2i(textureDimensions(clouds)) - vec2i(1);
@@ -47,16 +49,23 @@ fn composite_quad(id: vec2u) {
     let p01 = local + vec2u(0u, 1u);
     let p11 = local + vec2u(1u, 1u);
     composite_pixel(p00, upsample(t_ll, t_cl, t_lc, t_cc, vec2f(0.75, 0.75), p00));
-    composite_pixel(p10, upsample(t_cl, t_hl, t_cc, t_hc, vec2f(0.25, 0.75), p10));
-    composite_pixel(p01, upsample(t_lc, t_cc, t_lh, t_ch, vec2f(0.75, 0.25), p01));
-    composite_pixel(p11, upsample(t_cc, t_hc, t_ch, t_hh, vec2f(0.25, 0.25), p11));
+    // An odd-sized viewport's last column and row have no second pixel.
+    if (inside(p10)) {
+        composite_pixel(p10, upsample(t_cl, t_hl, t_cc, t_hc, vec2f(0.25, 0.75), p10));
+    }
+    if (inside(p01)) {
+        composite_pixel(p01, upsample(t_lc, t_cc, t_lh, t_ch, vec2f(0.75, 0.25), p01));
+    }
+    if (inside(p11)) {
+        composite_pixel(p11, upsample(t_cc, t_hc, t_ch, t_hh, vec2f(0.25, 0.25), p11));
+    }
 }
 
 @compute @workgroup_size(8, 8)
 fn cs_separate(@builtin(global_invocation_id) id: vec3u) {
     if (QUAD) {
         composite_quad(id.xy);
-    } else {
+    } else if (inside(id.xy)) {
         composite_pixel(id.xy, fetch_clouds(id.xy));
     }
 }

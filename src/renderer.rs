@@ -882,6 +882,7 @@ impl Renderer {
         composite.set_has_depth(has_depth);
         uniforms.set_viewport(checked.rect);
         composite.set_viewport(checked.rect);
+        composite.set_divisor(self.settings.march.resolution.divisor());
         let temporal = self.settings.march.temporal;
         let pattern = temporal.pattern;
         let block = pattern.block();

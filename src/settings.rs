@@ -338,7 +338,7 @@ pub enum Quality {
     High,
     /// The unoptimised march: every pixel every frame at full resolution, 64-128 steps
     /// uniform along the path, 12 light steps (growth 1.4), no temporal reuse, no coarse
-    /// stepping, no LOD, no early exit at low transmittance (the others stop at 0.01).
+    /// stepping, no LOD, no early exit at low transmittance (the others stop at 0.003).
     Ultra,
 }
 

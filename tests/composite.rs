@@ -20,8 +20,8 @@ use wgpu::TextureUsages as U;
 const OUTSIDE: [f32; 4] = [0.9, 0.1, 0.1, 1.0];
 
 /// One frame of the ridge view (scene depth in front of part of the clouds) in a `rect.0` x
-/// `rect.1` viewport at the top left of the right half of 2W x H targets into `output`, which
-/// holds OUTSIDE before; returns its pixels.
+/// `rect.1` viewport at the top right of 2W x H targets (`viewport_x`: its left edge) into
+/// `output`, which holds OUTSIDE before; returns its pixels.
 fn composite_into(
     format: F,
     usage: U,
@@ -101,7 +101,7 @@ fn composite_into(
             },
             depth: Some(&dv),
             viewport: Some(Viewport {
-                x: W,
+                x: viewport_x(rect),
                 y: 0,
                 width: rect.0,
                 height: rect.1,
@@ -121,6 +121,11 @@ fn composite_into(
     }
 }
 
+/// The left edge of a `rect` viewport flush with the targets' right edge.
+fn viewport_x(rect: (u32, u32)) -> u32 {
+    2 * W - rect.0
+}
+
 fn unorm8(pixels: &[[f32; 4]]) -> Vec<u8> {
     pixels
         .iter()
@@ -128,8 +133,8 @@ fn unorm8(pixels: &[[f32; 4]]) -> Vec<u8> {
         .collect()
 }
 
-/// Compares the two paths' pixels: equal within `tolerance` inside the `rect` viewport (at
-/// x = W, y = 0), untouched outside it.
+/// Compares the two paths' pixels: equal within `tolerance` inside the `rect` viewport,
+/// untouched outside it.
 fn assert_same(
     compute: &[[f32; 4]],
     render: &[[f32; 4]],
@@ -140,7 +145,7 @@ fn assert_same(
     let (mut worst, mut clouds) = (0.0f32, 0);
     for (i, (c, r)) in compute.iter().zip(render).enumerate() {
         let (x, y) = (i as u32 % (2 * W), i as u32 / (2 * W));
-        if x < W || x >= W + rect.0 || y >= rect.1 {
+        if x < viewport_x(rect) || y >= rect.1 {
             assert_eq!(
                 *c, outside,
                 "compute: pixel {i} outside the viewport changed"
@@ -168,8 +173,8 @@ fn assert_same(
 fn compute_composite_matches_the_fullscreen_triangle() {
     let f16 = |p: &[[f32; 4]]| halfs(p);
     let outside = OUTSIDE.map(|v| half::f16::from_f32(v).to_f32());
-    // The whole right half, and an odd-sized viewport: the half grid's last sample then
-    // stands for one column and one row.
+    // The whole right half, and an odd-sized viewport flush with the targets' right edge:
+    // the half grid's last sample then stands for one column and one row.
     for rect in [(W, H), (W - 1, H - 3)] {
         let compute = composite_into(F::Rgba16Float, U::STORAGE_BINDING, &f16, 8, rect);
         let render = composite_into(F::Rgba16Float, U::RENDER_ATTACHMENT, &f16, 8, rect);

@@ -40,6 +40,12 @@ impl CompositeUniforms {
         }
     }
 
+    /// The trace resolution's divisor, set when the frame is encoded (the settings then are
+    /// the ones the grid and the pipeline follow).
+    pub(crate) fn set_divisor(&mut self, divisor: u32) {
+        self.params[0] = divisor as f32;
+    }
+
     /// The rectangle of the targets this frame renders (x, y, width, height in pixels).
     pub(crate) fn set_viewport(&mut self, rect: [u32; 4]) {
         self.viewport = rect.map(|v| v as f32);
