@@ -1,12 +1,16 @@
 //! The benchmark's weather request section (issue 13 item 4): the worst frame while a
 //! request's map is generated a slice per frame (the default budget) against settled frames,
-//! and the whole map made at once in the call (budget 0).
+//! over three requests (one frame's stall of the machine is not the request's), and the whole
+//! map made at once in the call (budget 0).
 
 use std::time::Instant;
 
 use nimbus::demo::standard_views;
 use nimbus::settings::Quality;
 use nimbus::{Headless, Weather};
+
+/// Settled frames timed before the requests: a request's slice count at the default budget.
+const SETTLED_FRAMES: usize = 16;
 
 /// Measures and returns the section (markdown); also printed.
 pub fn weather_section(bake_size: (u32, u32)) -> Result<String, String> {
@@ -22,23 +26,48 @@ pub fn weather_section(bake_size: (u32, u32)) -> Result<String, String> {
         h.render(&frame).map_err(|e| e.to_string())?;
         Ok(t.elapsed().as_secs_f64() * 1e3)
     };
+    // As many settled frames as a request has slice frames at the default budget (16), so
+    // that the two worsts are taken over as many frames: a one-off stall of the machine (a
+    // frame 10-40% long now and then on a shared VM) then shows in both. Three requests in
+    // turn (stormy, cloudy, stormy), each judged against the settled frames' median.
     let mut normal = Vec::new();
-    for _ in 0..6 {
+    for _ in 0..SETTLED_FRAMES {
         normal.push(timed_frame(&mut h)?);
     }
     normal.sort_by(f64::total_cmp);
     let frame_wall = normal[normal.len() / 2];
     let normal_worst = normal[normal.len() - 1];
-    let t = Instant::now();
-    h.renderer_mut()
-        .set_weather(Weather::stormy(), 0.0, 20.0)
-        .map_err(|e| e.to_string())?;
-    let request_ms = t.elapsed().as_secs_f64() * 1e3;
-    let (mut request_worst, mut request_frames) = (0.0f64, 0);
-    while h.renderer().pending_weather_progress().is_some() {
-        request_worst = request_worst.max(timed_frame(&mut h)?);
-        request_frames += 1;
+    let (mut requests, mut all_request_frames) = (Vec::new(), Vec::new());
+    let (mut request_ms, mut request_frames) = (0.0f64, 0);
+    for weather in [Weather::stormy(), Weather::cloudy(), Weather::stormy()] {
+        let t = Instant::now();
+        h.renderer_mut()
+            .set_weather(weather, 0.0, 20.0)
+            .map_err(|e| e.to_string())?;
+        request_ms = request_ms.max(t.elapsed().as_secs_f64() * 1e3);
+        let (mut worst, mut frames) = (0.0f64, 0);
+        while h.renderer().pending_weather_progress().is_some() {
+            let ms = timed_frame(&mut h)?;
+            worst = worst.max(ms);
+            all_request_frames.push(ms);
+            frames += 1;
+        }
+        request_frames = request_frames.max(frames);
+        requests.push(worst);
     }
+    let mut ratios: Vec<f64> = requests.iter().map(|w| w / frame_wall).collect();
+    let worsts = requests
+        .iter()
+        .zip(&ratios)
+        .map(|(w, r)| format!("{w:.1} ({r:.2}x)"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    ratios.sort_by(f64::total_cmp);
+    let median_ratio = ratios[ratios.len() / 2];
+    // What the slices cost every frame, without the machine's stalls: the request frames'
+    // median against the settled frames'.
+    all_request_frames.sort_by(f64::total_cmp);
+    let sustained = all_request_frames[all_request_frames.len() / 2] / frame_wall;
     // The same request with the whole map at once, in the call.
     let mut at_once = settings;
     at_once.weather_map_texels_per_frame = 0;
@@ -56,21 +85,25 @@ pub fn weather_section(bake_size: (u32, u32)) -> Result<String, String> {
     let bake_ms = t.elapsed().as_secs_f64() * 1e3;
     drop(h);
     println!(
-        "weather request at {}x{}: frames {frame_wall:.1} ms (worst {normal_worst:.1}); in slices \
-         {request_frames} frames, worst {request_worst:.1} ms ({:.2}x; the call {request_ms:.1} ms); \
-         at once {bake_ms:.1} ms in the call",
+        "weather request at {}x{}: {} settled frames {frame_wall:.1} ms (worst {normal_worst:.1}, {:.2}x); \
+         three requests in slices of up to {request_frames} frames, their worst frames {worsts}: median {median_ratio:.2}x; \
+         their median frame {sustained:.2}x (the call at most {request_ms:.1} ms); at once {bake_ms:.1} ms in the call",
         bake_size.0,
         bake_size.1,
-        request_worst / frame_wall
+        normal.len(),
+        normal_worst / frame_wall
     );
     let md = format!(
-        "\n## Weather request\n\n{}x{}, medium, cloudy, ground view, settled: frames {frame_wall:.1} ms wall \
-         (median of 6; worst {normal_worst:.1}). A request's map in slices (default budget): {request_frames} frames, \
-         the worst {request_worst:.1} ms ({:.2}x the median), the call itself {request_ms:.2} ms. The whole map at once \
-         (budget 0): {bake_ms:.1} ms in the call, on top of that frame.\n",
+        "\n## Weather request\n\n{}x{}, medium, cloudy, ground view, settled: {} frames, {frame_wall:.1} ms wall \
+         (median; the worst {normal_worst:.1}, {:.2}x: the machine's own spread). Three requests in turn (stormy, \
+         cloudy, stormy), each map in slices (default budget, {request_frames} frames): the worst frame of each \
+         {worsts} against the settled median, **median {median_ratio:.2}x**; the median frame of the \
+         requests {sustained:.2}x the settled median (what the slices add, stalls aside); the call itself at most \
+         {request_ms:.2} ms. The whole map at once (budget 0): {bake_ms:.1} ms in the call, on top of that frame.\n",
         bake_size.0,
         bake_size.1,
-        request_worst / frame_wall
+        normal.len(),
+        normal_worst / frame_wall
     );
     Ok(md)
 }
