@@ -832,7 +832,6 @@ impl Renderer {
         let composite = CompositeUniforms::new(
             camera.inv_view_proj_rel,
             frame.camera.depth.far_value(),
-            self.settings.march.resolution.divisor(),
             false,
         );
         state.pending = Some(Pending {
@@ -882,7 +881,9 @@ impl Renderer {
         composite.set_has_depth(has_depth);
         uniforms.set_viewport(checked.rect);
         composite.set_viewport(checked.rect);
-        composite.set_divisor(self.settings.march.resolution.divisor());
+        // The trace grid, its resolve and the composite's pipeline follow the settings now.
+        let divisor = self.settings.march.resolution.divisor();
+        composite.set_divisor(divisor);
         let temporal = self.settings.march.temporal;
         let pattern = temporal.pattern;
         let block = pattern.block();
@@ -983,7 +984,7 @@ impl Renderer {
                     grid,
                     block,
                     offset,
-                    divisor: self.settings.march.resolution.divisor(),
+                    divisor,
                     max_samples: temporal.max_samples,
                     has_depth,
                     max_distance: self.settings.march.max_distance,
@@ -1021,7 +1022,7 @@ impl Renderer {
                 uniforms: &state.composite_uniforms,
                 timer: self.timer.as_ref(),
                 viewport: checked.rect,
-                divisor: self.settings.march.resolution.divisor(),
+                divisor,
             };
             self.composite.record(
                 &device,

@@ -26,16 +26,12 @@ pub(crate) struct CompositeUniforms {
 }
 
 impl CompositeUniforms {
-    pub(crate) fn new(
-        inv_view_proj_rel: Mat4,
-        far_value: f32,
-        divisor: u32,
-        has_depth: bool,
-    ) -> Self {
+    /// The trace divisor starts at 1: [`CompositeUniforms::set_divisor`] sets it at encode.
+    pub(crate) fn new(inv_view_proj_rel: Mat4, far_value: f32, has_depth: bool) -> Self {
         Self {
             inv_view_proj_rel: inv_view_proj_rel.to_cols_array(),
             depth: [far_value, 0.0, 0.0, 0.0],
-            params: [divisor as f32, if has_depth { 1.0 } else { 0.0 }, 0.0, 0.0],
+            params: [1.0, if has_depth { 1.0 } else { 0.0 }, 0.0, 0.0],
             viewport: [0.0; 4],
         }
     }
