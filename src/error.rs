@@ -60,8 +60,9 @@ pub enum Error {
     /// A CPU query's point, segment or time is unusable (NaN, infinite).
     #[error("invalid query: {0}")]
     InvalidQuery(String),
-    /// `encode` was called before any successful `prepare`.
-    #[error("renderer not prepared: call prepare() with the frame inputs before encode()")]
+    /// `encode` was called before any successful `prepare`, or after `set_settings` without
+    /// a `prepare` since (the prepared frame was made from the old settings).
+    #[error("renderer not prepared: call prepare() with the frame inputs before encode(), and again after set_settings()")]
     NotPrepared,
     /// No GPU adapter (software Vulkan included) could be found.
     #[error("no GPU adapter found: {0}")]

@@ -505,7 +505,8 @@ impl Renderer {
     /// `settings.weather` takes effect at once (no transition; the wind carries on from where
     /// it is): use [`Renderer::set_weather`] for a smooth change. The new textures are built
     /// beside the old ones and swapped in only once the GPU has accepted the work: on error
-    /// nothing changes.
+    /// nothing changes. A frame prepared before the change must be prepared again: `encode`
+    /// refuses it with [`Error::NotPrepared`] (its parameters came from the old settings).
     pub fn set_settings(&mut self, settings: Settings) -> Result<()> {
         settings.validate()?;
         let (device, queue) = (self.device.clone(), self.queue.clone());
@@ -564,8 +565,12 @@ impl Renderer {
         }
         self.settings = settings;
         self.query_data = None;
-        // Accumulated history was rendered with the old settings.
+        // Accumulated history was rendered with the old settings, and a prepared frame's
+        // parameters were made from them: it must be prepared again.
         self.reset_history();
+        for v in self.views.iter_mut() {
+            v.pending = None;
+        }
         Ok(())
     }
 

@@ -4,7 +4,7 @@
 //! upsample of a half-resolution trace grid and a viewport inside the targets, and leave the
 //! pixels outside the viewport as they were; the compute pass composites the half grid's 2×2
 //! pixels per invocation, so an odd-sized viewport checks its last column and row. An output
-//! neither path can write is refused.
+//! neither path can write is refused, and so is a frame prepared before a settings change.
 
 mod common;
 use common::{halfs, quiet, rgba, setup, small_noise, upload, H, W};
@@ -231,4 +231,81 @@ fn an_output_neither_path_can_write_is_refused() {
             "{e}"
         );
     }
+}
+
+/// One frame of the ridge view on a half grid into a storage output; with `change`, prepared
+/// with the full grid, then `set_settings` to the half grid: encode refuses the frame prepared
+/// with the old settings, and the frame prepared again is drawn. Returns its pixels.
+fn half_grid_frame(change: bool) -> Vec<[f32; 4]> {
+    setup();
+    let (device, queue, _) = nimbus::headless::create_device().unwrap();
+    let with = |resolution| {
+        let mut s = quiet(small_noise(3));
+        s.march.resolution = resolution;
+        s
+    };
+    let first = if change {
+        TraceResolution::Full
+    } else {
+        TraceResolution::Half
+    };
+    let mut r = Renderer::new(&device, &queue, with(first)).unwrap();
+    let view = standard_views()[4];
+    let scene = view.scene(W, H);
+    let make = |label, format, usage| texture_2d(&device, label, (W, H), format, usage);
+    let color = make("scene", F::Rgba16Float, U::TEXTURE_BINDING | U::COPY_DST);
+    upload(&queue, &color, &halfs(&scene.color), 8);
+    let depth = make("depth", F::R32Float, U::TEXTURE_BINDING | U::COPY_DST);
+    upload(&queue, &depth, bytemuck::cast_slice(&scene.depth), 4);
+    let output = make("output", F::Rgba16Float, U::STORAGE_BINDING | U::COPY_SRC);
+    let (cv, dv, ov) = (
+        color.create_view(&Default::default()),
+        depth.create_view(&Default::default()),
+        output.create_view(&Default::default()),
+    );
+    let targets = Targets {
+        color: ColorTargets::Separate {
+            scene: &cv,
+            output: &ov,
+        },
+        depth: Some(&dv),
+        viewport: None,
+    };
+    let frame = view.frame(W, H, 0.0);
+    r.prepare(&frame).unwrap();
+    if change {
+        r.set_settings(with(TraceResolution::Half)).unwrap();
+        let mut enc = device.create_command_encoder(&Default::default());
+        let refused = r.encode(&mut enc, &targets);
+        assert!(
+            matches!(refused, Err(Error::NotPrepared)),
+            "a frame prepared with the old settings was encoded: {refused:?}"
+        );
+        r.prepare(&frame).unwrap();
+    }
+    let mut enc = device.create_command_encoder(&Default::default());
+    r.encode(&mut enc, &targets).unwrap();
+    queue.submit([enc.finish()]);
+    rgba(&read_texture(&device, &queue, &output, 0).unwrap())
+}
+
+#[test]
+fn a_settings_change_between_prepare_and_encode_needs_a_new_prepare() {
+    // The trace grid, the march's and the composite's parameters all come from the settings:
+    // a frame prepared on the full grid and encoded on the half one read the half grid as if
+    // it were full (differences up to 0.49). Encode now refuses it; prepared again, the frame
+    // is the half grid's own.
+    let (changed, plain) = (half_grid_frame(true), half_grid_frame(false));
+    let worst = changed
+        .iter()
+        .zip(&plain)
+        .flat_map(|(a, b)| (0..4).map(move |k| (a[k] - b[k]).abs()))
+        .fold(0.0f32, f32::max);
+    println!(
+        "prepared again after the change, against the half grid throughout: max difference {worst}"
+    );
+    assert!(
+        worst <= 1e-3,
+        "the frame after the change differs by {worst}"
+    );
 }
