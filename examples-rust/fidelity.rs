@@ -816,13 +816,25 @@ fn main() -> Result<(), String> {
              debug sphere it is the radius: both ends on the surface, lit from the end that faces\n\
              the sun (the two ends share the light near the terminator), and the column's sides\n\
              leak diffuse light (diffusion theory's transverse buckling, matched at the sunlit face\n\
-             to the broad medium's field). The light the delta scaling keeps in the beam is seen\n\
-             through the phase spread by the peak's own width once per forward scattering\n\
-             (`peak_phase`): unspread, it put the phase's whole forward peak (about 1100 / sr) on a\n\
-             back-lit sphere's rim. What the sphere rows still miss: the lateral transport a single\n\
+             to the broad medium's field). The light the delta scaling keeps in the beam\n\
+             (`beam_light`) is seen through the phase spread once per forward scattering: its\n\
+             narrow part, the phase's diffraction lobe (HG 0.988, weight 0.518 at 10 µm), by that\n\
+             lobe (HG lobes compose exactly); the rest of the delta-Eddington peak (f = g² = 0.747),\n\
+             scattered in the broad Draine lobe, by the Draine lobe (`PhaseModel::beam_split`,\n\
+             `broad_phase`). Unspread, the beam put the phase's whole forward peak (about 1100 / sr)\n\
+             on a back-lit sphere's rim, 1° from the sun; spread as a whole by one width matched to\n\
+             the peak's second moment (0.991 for this phase: the Draine lobe's α cos²θ puts second\n\
+             moment both forward and back), 4 times the path tracer's rim (contrast 2.243, disc\n\
+             1.320). Split (2026-12-05): the back-lit disc 0.819, its contrast 0.985. The broad\n\
+             part spreads tens of degrees per scattering, and near the limb it has left the thin\n\
+             cap of medium the view ray crosses: shown with the narrow part's spread it made the\n\
+             rim brighter still (1.666 over the disc); left out, the disc read 0.740 and a slab\n\
+             seen 30° from the sun too dark (0.76 of an independent light tracer, below). The\n\
+             split's cost on the noise views: FLIP 0.166 -> 0.170, 0.195 -> 0.200, 0.101 -> 0.101\n\
+             (ratios 0.975 -> 1.013, 1.058 -> 1.070, 1.006 -> 1.039); none measurable in frame time\n\
+             (docs/performance.md). What the sphere rows still miss: the lateral transport a single\n\
              column cannot carry, from the lit hemisphere into the terminator region (side-lit, the\n\
-             middle of the disc too dark and the far limb too bright), and the rim of a back-lit\n\
-             sphere, 1° from the sun, where the forward peak's exact width decides the brightness.\n\
+             middle of the disc too dark and the far limb too bright: 0.764, contrast 0.671).\n\
              The noise-model views are judged on the layer column, with the march's noise LOD\n\
              off: at 64×36 a pixel's footprint is 20 times a 1280×720 frame's, and the coarse mips\n\
              showed the march a thinner medium than the path tracer's mip 0. The column below a\n\
@@ -904,7 +916,24 @@ fn main() -> Result<(), String> {
              energy conservation), but with the Jendersie-d'Eon phase its estimates are noisy at\n\
              these sample counts: the phase's forward peak (g = 0.988, about 1100 / sr) makes rare\n\
              paths that travel near the sun's direction carry most of the light. The noise column\n\
-             says how far to trust each row; the HG 0.8 rows are the precise ones.\n",
+             says how far to trust each row; the HG 0.8 rows are the precise ones.\n\n\
+             The thin Jendersie-d'Eon slabs were checked against an independent estimator\n\
+             (2026-12-05): `docs/fidelity/slab_light_tracer.py` (numpy) traces photons from the sun\n\
+             through the same slab and scores each collision toward the camera's pixel directions\n\
+             (light tracing: the directions near the sun, where this phase's peak lives, are the\n\
+             ones its photons travel, so it does not have the path tracer's fireflies). It agrees\n\
+             with the HG 0.8 τ = 1 references within 1-2% (0.368 / 0.190 / 0.235 against 0.370 /\n\
+             0.188 / 0.239, in the table's units) and its three seeds of 2·10⁶ photons with each\n\
+             other within 2%. Against it (views 90° / 55° / 20°) the march is, τ = 1: 1.307 / 1.639\n\
+             / 0.724 (sun 30°), 1.049 / 1.405 / 1.209 (sun 60°); τ = 5: 1.165 / 1.449 / 1.194,\n\
+             1.019 / 1.274 / 1.170 (before the beam's split 1.162 / 1.594 / 0.612, 0.963 / 1.320 /\n\
+             1.178, 1.110 / 1.440 / 1.134, 0.918 / 1.227 / 1.158). So these rows' misses are the\n\
+             model's, not the references' noise: light seen 65-95° from the sun, where this phase\n\
+             has its deep side-scattering minimum (the Draine lobe's 1 + α cos²θ, α = 22), comes out\n\
+             1.3-1.6 times too bright, and 130° (its backward rise) 0.6-0.7 times too dark. The\n\
+             thin columns' diffuse light is spread by a smooth lobe around the sun (HG of asymmetry\n\
+             g g'), which has neither. A lobe with the Draine shape fixed 55° (0.89, 1.03 at τ = 1)\n\
+             but darkened 20° (0.66): not kept.\n",
         );
         md.push_str("\n## Pictures\n\n");
         let mut names: Vec<String> = std::fs::read_dir(&dir)

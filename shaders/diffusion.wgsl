@@ -64,14 +64,18 @@ fn delta_eddington_moments(a: f32, b: f32, mu0: f32, albedo: f32, g: f32, tau_ac
     return vec2f(c1 * ea + c2 * eb + alpha * ed, p * (c1 * ea - c2 * eb) + beta * ed);
 }
 
-// The phase that sends the delta scaling's forward-peak light toward the camera: light scattered
-// n times into the peak has been spread n times by the peak's own width (an HG lobe of
-// asymmetry `spread`, PhaseModel::peak_spread), so the phase is seen with its asymmetries scaled
-// by spreadⁿ, averaged over n's Poisson law (n = 1, 2, and n ≥ 3 at its mean). peak_phase in
+// The light the delta scaling keeps in the beam, scattered toward the camera (per unit sun
+// irradiance, per steradian) at a sample tau_sun from the sun: its narrow part (weight
+// `narrow_weight` of the phase, spread `spread` per scattering: the phase's diffraction lobe)
+// through the phase with its asymmetries scaled by spreadⁿ, averaged over n's Poisson law (n = 1,
+// 2, and n ≥ 3 at its mean); the rest of f = g² through broad_phase. beam_light in
 // src/lighting/diffusion.rs derives it. `model`, `params`: as phase_eval's.
-fn peak_phase(model: u32, params: vec4f, cos_theta: f32, tau_sun: f32, albedo: f32, g: f32, spread: f32) -> f32 {
+fn beam_light(model: u32, params: vec4f, cos_theta: f32, tau_sun: f32, albedo: f32, g: f32, spread: f32, narrow_weight: f32) -> f32 {
     let gc = clamp(g, 0.0, 1.0);
-    let m = clamp(albedo, 0.0, DE_MAX_ALBEDO) * gc * gc * max(tau_sun, 0.0);
+    let f = gc * gc;
+    let w = clamp(albedo, 0.0, DE_MAX_ALBEDO);
+    let tau = max(tau_sun, 0.0);
+    let m = w * narrow_weight * tau;
     var p = vec3f(1.0 - 0.5 * m, 0.5 * m, 0.0);
     var n3 = 3.0;
     if (m >= 1e-3) {
@@ -83,30 +87,51 @@ fn peak_phase(model: u32, params: vec4f, cos_theta: f32, tau_sun: f32, albedo: f
             n3 = max((m / at_least_one - p.x - 2.0 * p.y) / p.z, 3.0);
         }
     }
-    return p.x * phase_eval(model, params, cos_theta, spread)
+    let narrow = p.x * phase_eval(model, params, cos_theta, spread)
         + p.y * phase_eval(model, params, cos_theta, spread * spread)
         + p.z * phase_eval(model, params, cos_theta, pow(spread, n3));
+    let narrow_beam = exp(-(1.0 - w * narrow_weight) * tau) - exp(-tau);
+    let broad_beam = exp(-(1.0 - w * f) * tau) - exp(-(1.0 - w * narrow_weight) * tau);
+    var light = narrow * narrow_beam;
+    if (broad_beam > 0.0) {
+        let mb = w * (f - narrow_weight) * tau;
+        let n = select(mb / (1.0 - exp(-mb)), 1.0 + 0.5 * mb, mb < 1e-3);
+        light += broad_phase(model, params, cos_theta, n) * broad_beam;
+    }
+    return light;
+}
+
+// PhaseModel::broad_phase: light scattered n times in the broad (Draine) part of the beam, then
+// toward the camera. Only the Jendersie-d'Eon blend (model 0) has a broad part.
+fn broad_phase(model: u32, params: vec4f, cos_theta: f32, n: f32) -> f32 {
+    if (model != 0u) {
+        return 0.0;
+    }
+    let g_d = params.y;
+    let alpha = params.z;
+    let s = g_d * (1.0 + alpha * (3.0 + 2.0 * g_d * g_d) / 5.0) / (1.0 + alpha * (1.0 + 2.0 * g_d * g_d) / 3.0);
+    let k = max(n, 1.0);
+    return (1.0 - params.w) * draine(cos_theta, g_d * pow(s, k - 1.0), alpha)
+        + params.w * draine(cos_theta, g_d * pow(s, k), alpha);
 }
 
 // The multiple-scattering part of the source per unit sun irradiance (see
 // delta_eddington_source in src/lighting/diffusion.rs for why each term): the forward-scattered
-// light the delta scaling keeps in the beam, p (e^{-(1-wg²)tau} - e^{-tau}) with the phase p
-// spread by peak_phase (phase_peak); the diffuse field
+// light the delta scaling keeps in the beam (`beam`, beam_light's); the diffuse field
 // seen through the phase, I0 + g mu I1 in a thick column (mu: the light's direction toward the
 // camera against the downward vertical), the same energy in an HG lobe of asymmetry g g'
 // around the sun in a thin one, blended by 1 - e^{-tau*'}.
-fn delta_eddington_source(tau_sun: f32, tau_above: f32, tau_below: f32, mu0: f32, mu_view: f32, cos_theta: f32, albedo: f32, g: f32, phase_peak: f32, tau_across: f32) -> f32 {
+fn delta_eddington_source(tau_above: f32, tau_below: f32, mu0: f32, mu_view: f32, cos_theta: f32, albedo: f32, g: f32, beam: f32, tau_across: f32) -> f32 {
     let w = clamp(albedo, 0.0, DE_MAX_ALBEDO);
     let m0 = max(mu0, 1e-3);
     let a = tau_above;
     let i = delta_eddington(a, tau_below, m0, w, g, tau_across);
     let f = max(g, 0.0) * max(g, 0.0);
-    let peak = phase_peak * (exp(-(1.0 - w * f) * tau_sun) - exp(-tau_sun));
     let p1 = i.x + g * mu_view * i.y;
     let ge = g * (g - f) / (1.0 - f);
     let lobe = 4.0 * PI * i.x * henyey_greenstein(cos_theta, ge);
     let thick = 1.0 - exp(-(a + tau_below) * (1.0 - w * f));
-    return max(peak + mix(lobe, p1, thick), 0.0);
+    return max(beam + mix(lobe, p1, thick), 0.0);
 }
 
 // The share of `ambient_top` in the ambient light inside a column with optical depths `above`

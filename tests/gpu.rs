@@ -12,7 +12,7 @@ use nimbus::{
 };
 
 mod common;
-use common::{f16, headless, quiet, setup, small_noise, H, W};
+use common::{debug_sphere, f16, headless, quiet, setup, small_noise, H, W};
 
 fn render_view(h: &mut Headless, view: &DemoView) -> (Vec<[f32; 4]>, Vec<[f32; 4]>) {
     let scene = view.scene(W, H);
@@ -469,7 +469,7 @@ fn slab_closed_form(radius: f32) {
 /// integrated finely along every pixel's ray: the shader computes what the tested CPU code does.
 #[test]
 fn delta_eddington_in_the_march_matches_its_cpu_mirror() {
-    use nimbus::lighting::diffusion::{delta_eddington_source, peak_phase, ColumnSample};
+    use nimbus::lighting::diffusion::{beam_light, delta_eddington_source, ColumnSample};
     let (bottom, top, extinction, albedo) = (1_000.0f32, 1_500.0f32, 0.01f32, 0.999f32);
     let mut settings = quiet(small_noise(1));
     settings.debug_density = DebugDensity::Slab {
@@ -532,8 +532,8 @@ fn delta_eddington_in_the_march_matches_its_cpu_mirror() {
                     cos_theta,
                     tau_across: f32::INFINITY,
                 };
-                let phase_peak = peak_phase(&phase, cos_theta, column.tau_sun, albedo);
-                let ms = delta_eddington_source(&column, albedo, g, phase_peak);
+                let beam = beam_light(&phase, cos_theta, column.tau_sun, albedo);
+                let ms = delta_eddington_source(&column, albedo, g, beam);
                 l += ((-extinction * s).exp() * albedo * extinction * 10.0 * ms * ds) as f64;
             }
             let i = (y * W + x) as usize;
@@ -671,17 +671,7 @@ fn homogeneous_sphere_is_round_and_transmits_by_beer_lambert() {
 #[test]
 fn a_sphere_is_lit_from_its_sun_side_and_its_rim_is_not_a_spike() {
     let center = Vec3::new(0.0, 3_000.0, -4_000.0);
-    let mut settings = quiet(small_noise(1));
-    settings.debug_density = DebugDensity::Sphere {
-        center,
-        radius: 1_000.0,
-        density: 1.0,
-    };
-    settings.weather.clouds.extinction = 0.02;
-    settings.weather.clouds.albedo = 0.999;
-    settings.weather.ambient_top = Vec3::ZERO;
-    settings.weather.ambient_bottom = Vec3::ZERO;
-    settings.haze.fade_distance = f32::INFINITY;
+    let settings = quiet(debug_sphere(center));
     let eye = Vec3::new(0.0, 3_000.0, 0.0);
     let render = |sun: Vec3| {
         let mut h = headless(settings.clone());

@@ -47,7 +47,8 @@ pub(crate) struct MarchUniforms {
     pattern: [f32; 4],
     opts: [f32; 4],
     viewport: [f32; 4],
-    /// Multiple-scattering model (0 single, 1 octaves, 2 delta-Eddington), phase asymmetry g.
+    /// Multiple-scattering model (0 single, 1 octaves, 2 delta-Eddington), phase asymmetry g,
+    /// the delta-Eddington peak's narrow spread and weight (PhaseModel::beam_split).
     ms_model: [f32; 4],
     /// Light from the cloud shadow map (0/1), local light distance (m), local light steps.
     shadow_light: [f32; 4],
@@ -224,10 +225,10 @@ impl MarchUniforms {
                 // |g| < 0.98 keeps the delta scaling's 1 - g² away from 0 (a dual-lobe HG may
                 // reach 0.999; no cloud phase comes near).
                 s.lighting.phase.asymmetry().clamp(-0.98, 0.98),
-                // How one scattering into the delta-Eddington peak spreads light (diffusion.wgsl's
-                // peak_phase).
-                s.lighting.phase.peak_spread(),
-                0.0,
+                // The delta-Eddington peak's narrow part: its spread per scattering and its weight
+                // (PhaseModel::beam_split, diffusion.wgsl's beam_light).
+                s.lighting.phase.beam_split().1,
+                s.lighting.phase.beam_split().0,
             ],
             shadow_light: [
                 flag(s.shadows.enabled && s.shadows.march_light),

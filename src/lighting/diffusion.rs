@@ -153,30 +153,48 @@ pub struct ColumnSample {
     pub tau_across: f32,
 }
 
-/// The phase that sends the light the delta scaling keeps in the beam toward the camera, at
-/// a sample `tau_sun` from the sun in a medium of albedo `albedo` and phase `phase`.
+/// The light the delta scaling keeps in the beam, scattered toward the camera: per unit sun
+/// irradiance and per steradian, at a sample `tau_sun` from the sun in a medium of albedo
+/// `albedo` and phase `phase` (the march's `beam_light`, shaders/diffusion.wgsl).
 ///
 /// The scaled beam e^{-(1-ωf)τ} (f = g²) is the direct beam plus light scattered n ≥ 1 times
-/// into the forward peak, e^{-τ} mⁿ/n! with m = ωfτ (Poisson). That light is not collimated:
-/// each scattering into the peak spreads it by the peak's own width, an HG lobe of asymmetry
-/// s = [`PhaseModel::peak_spread`] (the peak's second moment), and HG lobes compose exactly,
-/// HG(g₁) ⊛ HG(g₂) = HG(g₁g₂) (their Legendre moments multiply). So light scattered n times and
-/// then toward the camera sees the phase with its asymmetries scaled by sⁿ, averaged over n's
-/// law given n ≥ 1: n = 1 and 2 exactly, n ≥ 3 at its conditional mean (a sharp lobe is far
-/// from linear in n). Scattering that light with the unspread phase put the whole of the
-/// default phase's forward peak (about 1100 / sr) on it: a back-lit sphere's rim, 1° from the
-/// sun, came out 27 times the path tracer. The HG kernel's tail at wide angles raises an HG 0.8
-/// slab's wide-angle views by 3-5%; clipping the spread phase to the phase there (min) would
-/// drop 11% of the peak light's energy, so the kernel is kept whole.
-pub fn peak_phase(phase: &PhaseModel, cos_theta: f32, tau_sun: f32, albedo: f32) -> f32 {
+/// into the forward peak, e^{-τ} mⁿ/n! with m = ωfτ (Poisson). That light is not collimated.
+/// Its narrow part ([`PhaseModel::beam_split`]: weight f_n, spread s), e^{-(1-ωf_n)τ} - e^{-τ},
+/// has been spread by the narrow lobe once per scattering, and HG lobes compose exactly,
+/// HG(g₁) ⊛ HG(g₂) = HG(g₁g₂): light scattered n times and then toward the camera sees the
+/// phase with its asymmetries scaled by sⁿ, averaged over n's law given n ≥ 1 (n = 1 and 2
+/// exactly, n ≥ 3 at its conditional mean: a sharp lobe is far from linear in n). The rest,
+/// e^{-(1-ωf)τ} - e^{-(1-ωf_n)τ}, has been scattered at least once in the broad part: it is
+/// seen through [`PhaseModel::broad_phase`] at its mean count. Scattering the beam light with
+/// the unspread phase put the whole forward peak (about 1100 / sr) on a back-lit sphere's rim,
+/// 1° from the sun: 27 times the path tracer; spreading all of f by one moment-matched width,
+/// 4 times. Both parts together carry exactly the delta-Eddington beam's light.
+pub fn beam_light(phase: &PhaseModel, cos_theta: f32, tau_sun: f32, albedo: f32) -> f32 {
     let g = phase.asymmetry().clamp(0.0, 0.98);
-    let s = phase.peak_spread();
-    let [p1, p2, p3, n3] = peak_scatterings(
-        albedo.clamp(0.0, MAX_ALBEDO) * g.max(0.0) * g.max(0.0) * tau_sun.max(0.0),
-    );
-    p1 * phase.eval(cos_theta, s)
+    let f = g * g;
+    let (f_narrow, s) = phase.beam_split();
+    let w = albedo.clamp(0.0, MAX_ALBEDO);
+    let tau = tau_sun.max(0.0);
+    let [p1, p2, p3, n3] = peak_scatterings(w * f_narrow * tau);
+    let narrow = p1 * phase.eval(cos_theta, s)
         + p2 * phase.eval(cos_theta, s * s)
-        + p3 * phase.eval(cos_theta, s.powf(n3))
+        + p3 * phase.eval(cos_theta, s.powf(n3));
+    let narrow_beam = (-(1.0 - w * f_narrow) * tau).exp() - (-tau).exp();
+    let broad_beam = (-(1.0 - w * f) * tau).exp() - (-(1.0 - w * f_narrow) * tau).exp();
+    let mut light = narrow * narrow_beam;
+    if broad_beam > 0.0 {
+        light += phase.broad_phase(cos_theta, mean_count(w * (f - f_narrow) * tau)) * broad_beam;
+    }
+    light
+}
+
+/// The mean number of events of a Poisson law of mean m given at least one: m / (1 - e^{-m}).
+fn mean_count(m: f32) -> f32 {
+    if m < 1e-3 {
+        1.0 + 0.5 * m
+    } else {
+        m / (1.0 - (-m).exp())
+    }
 }
 
 /// The law of the number n of peak scatterings of light scattered at least once, for a Poisson
@@ -200,11 +218,10 @@ fn peak_scatterings(m: f32) -> [f32; 4] {
 }
 
 /// The multiple-scattering part of the march's source per unit sun irradiance for a sample
-/// `c` of a medium of single-scattering albedo `albedo` and phase asymmetry `g`; `phase_peak`
-/// is [`peak_phase`] at the sample's scattering angle:
+/// `c` of a medium of single-scattering albedo `albedo` and phase asymmetry `g`; `beam` is
+/// [`beam_light`] at the sample:
 ///
-/// - the forward-scattered light the delta scaling keeps in the beam, p (e^{-(1-ωg²)τ} - e^{-τ})
-///   with the spread phase p of [`peak_phase`];
+/// - the forward-scattered light the delta scaling keeps in the beam, `beam`;
 /// - the diffuse field seen through the phase. In a thick column that is its P1 part,
 ///   I0 + g μ I1, whose anisotropy follows the net (vertical) flux. In a thin one the diffuse
 ///   light is still mostly light scattered once, bunched around the sun's direction, and a P1
@@ -213,9 +230,9 @@ fn peak_scatterings(m: f32) -> [f32; 4] {
 ///   Henyey-Greenstein lobe around the sun of asymmetry g g' (the phase's remainder after the
 ///   delta scaling, g' = g / (1 + g), seen through the phase once more). The two are blended by
 ///   the column's scaled optical thickness, 1 - e^{-τ*'}.
-pub fn delta_eddington_source(c: &ColumnSample, albedo: f32, g: f32, phase_peak: f32) -> f32 {
+pub fn delta_eddington_source(c: &ColumnSample, albedo: f32, g: f32, beam: f32) -> f32 {
     let ColumnSample {
-        tau_sun,
+        tau_sun: _,
         tau_above,
         tau_below,
         mu0,
@@ -228,12 +245,11 @@ pub fn delta_eddington_source(c: &ColumnSample, albedo: f32, g: f32, phase_peak:
     let a = tau_above;
     let (i0, i1) = delta_eddington_column(a, tau_below, m0, w, g, tau_across);
     let f = g.max(0.0) * g.max(0.0);
-    let peak = phase_peak * ((-(1.0 - w * f) * tau_sun).exp() - (-tau_sun).exp());
     let p1 = i0 + g * mu_view * i1;
     let ge = g * (g - f) / (1.0 - f);
     let lobe = 4.0 * PI * i0 * crate::lighting::phase::henyey_greenstein(cos_theta, ge);
     let thick = 1.0 - (-(a + tau_below) * (1.0 - w * f)).exp();
-    (peak + lobe + (p1 - lobe) * thick).max(0.0)
+    (beam + lobe + (p1 - lobe) * thick).max(0.0)
 }
 
 /// The share of the sky above (`ambient_top`) in the ambient light inside a column with
@@ -372,33 +388,52 @@ mod tests {
     }
 
     #[test]
-    fn the_peak_light_keeps_its_energy_and_spreads_with_depth() {
+    fn the_beam_light_keeps_its_energy_and_spreads_with_depth() {
         use crate::lighting::phase::PhaseModel;
         for phase in [
             PhaseModel::default(),
+            PhaseModel::JendersieDEon {
+                droplet_diameter_um: 30.0,
+            },
             PhaseModel::DualLobeHg {
                 g_forward: 0.8,
                 g_backward: 0.0,
                 forward_weight: 1.0,
             },
         ] {
-            let mut previous_peak = f32::INFINITY;
-            for tau_sun in [0.0f32, 0.5, 2.0, 8.0, 30.0] {
+            let g = phase.asymmetry();
+            let f = g * g;
+            let mut previous = f32::INFINITY;
+            for tau_sun in [0.01f32, 0.5, 2.0, 8.0, 30.0] {
                 let total = crate::lighting::phase::over_the_sphere(20_000, |mu| {
-                    peak_phase(&phase, mu as f32, tau_sun, 0.999) as f64
+                    beam_light(&phase, mu as f32, tau_sun, 0.999) as f64
                 });
-                // It only redistributes the peak light (a mixture of normalised phases).
+                // It only redistributes the delta-Eddington beam's scattered light (a mixture
+                // of normalised phases weighted by the narrow and broad parts of the beam).
+                let beam = ((-(1.0 - 0.999 * f) * tau_sun).exp() - (-tau_sun).exp()) as f64;
                 assert!(
-                    (total - 1.0).abs() < 5e-3,
-                    "{phase:?} τ {tau_sun}: ∫ = {total}"
+                    (total / beam - 1.0).abs() < 5e-3,
+                    "{phase:?} τ {tau_sun}: ∫ = {total}, beam {beam}"
                 );
-                // Deeper light has been scattered more often into the peak: a lower peak.
-                let ahead = peak_phase(&phase, 1.0, tau_sun, 0.999);
-                assert!(ahead < previous_peak * 1.0001, "{phase:?} τ {tau_sun}");
+                // Deeper light has been scattered more often into the peak: per unit of beam
+                // light, a lower peak, never above the unspread phase's.
+                let ahead = beam_light(&phase, 1.0, tau_sun, 0.999) / beam as f32;
+                assert!(ahead < previous * 1.0001, "{phase:?} τ {tau_sun}");
                 assert!(ahead <= phase.eval(1.0, 1.0), "{phase:?} τ {tau_sun}");
-                previous_peak = ahead;
+                previous = ahead;
             }
         }
+        // The dual-lobe HG keeps its whole peak narrow; the Jendersie-d'Eon blend's narrow part
+        // is its diffraction lobe.
+        let hg = PhaseModel::DualLobeHg {
+            g_forward: 0.8,
+            g_backward: 0.0,
+            forward_weight: 1.0,
+        };
+        let (narrow, spread) = hg.beam_split();
+        assert!((narrow - 0.64).abs() < 1e-6 && spread == hg.peak_spread());
+        let (narrow, spread) = PhaseModel::default().beam_split();
+        assert!((narrow - 0.5176).abs() < 1e-3 && (spread - 0.9882).abs() < 1e-3);
     }
 
     #[test]
@@ -452,8 +487,8 @@ mod tests {
                             g_backward: 0.0,
                             forward_weight: 1.0,
                         };
-                        let phase_peak = peak_phase(&model, cos_theta, column.tau_sun, albedo);
-                        let ms = delta_eddington_source(&column, albedo, g, phase_peak);
+                        let beam = beam_light(&model, cos_theta, column.tau_sun, albedo);
+                        let ms = delta_eddington_source(&column, albedo, g, beam);
                         let j = albedo * (ss + ms) * (-to_exit / mu).exp() / mu;
                         radiance += (j * tau / n_t as f32) as f64;
                     }

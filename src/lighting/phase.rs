@@ -82,6 +82,11 @@ pub fn draine(cos_theta: f32, g: f32, alpha: f32) -> f32 {
         / (1.0 + alpha * (1.0 + 2.0 * g * g) / 3.0)
 }
 
+/// Draine 2003's asymmetry ⟨cos θ⟩: g (1 + α (3 + 2g²) / 5) / (1 + α (1 + 2g²) / 3).
+pub fn draine_asymmetry(g: f32, alpha: f32) -> f32 {
+    g * (1.0 + alpha * (3.0 + 2.0 * g * g) / 5.0) / (1.0 + alpha * (1.0 + 2.0 * g * g) / 3.0)
+}
+
 /// The HG + Draine blend: (1 - w) p_hg(g_hg) + w p_d(g_d, α).
 pub fn hg_draine(cos_theta: f32, p: &HgDraineParams) -> f32 {
     (1.0 - p.w_d) * henyey_greenstein(cos_theta, p.g_hg) + p.w_d * draine(cos_theta, p.g_d, p.alpha)
@@ -144,8 +149,10 @@ impl PhaseModel {
     /// Delta-Eddington splits the phase into a peak of weight f = g² and a rest of asymmetry
     /// g' = (g - f) / (1 - f). The peak's first moment is then exactly 1 (a delta, for the
     /// fluxes), but its second is (χ₂ - (1 - f) g'²) / f < 1: it has a width. An HG lobe with
-    /// that second moment has s = √((χ₂ - (1 - f) g'²) / f). HG(0.8): s = 0.943; the default
-    /// Jendersie-d'Eon phase: about 0.96. 1 (no spread) where the phase has no forward peak.
+    /// that second moment has s = √((χ₂ - (1 - f) g'²) / f). HG(0.8): s = 0.943. 1 (no spread)
+    /// where the phase has no forward peak. For the Jendersie-d'Eon blend this moment is
+    /// misleading (the Draine lobe's α cos²θ puts second moment both forward and back: 0.991 at
+    /// 10 µm, narrower than its diffraction lobe); [`PhaseModel::beam_split`] splits its peak.
     pub fn peak_spread(&self) -> f32 {
         let g = self.asymmetry().clamp(0.0, 0.98);
         let f = g * g;
@@ -157,19 +164,65 @@ impl PhaseModel {
         peak_moment.clamp(0.0, 1.0).sqrt()
     }
 
-    /// The asymmetry parameter g = ⟨cos θ⟩ (the phase's first Legendre moment), which is what
-    /// a P1 (Eddington) diffuse field sees of the phase. HG's is its g; Draine 2003's is
-    /// g (1 + α (3 + 2g²) / 5) / (1 + α (1 + 2g²) / 3).
-    pub fn asymmetry(&self) -> f32 {
-        let draine_g = |g: f32, a: f32| {
-            g * (1.0 + a * (3.0 + 2.0 * g * g) / 5.0) / (1.0 + a * (1.0 + 2.0 * g * g) / 3.0)
-        };
+    /// What the delta-Eddington peak (weight f = g², kept in the sun's beam) is made of:
+    /// (the weight of its narrow part, that part's spread per scattering). The rest of the
+    /// peak, f minus the narrow weight, is broad: [`PhaseModel::broad_phase`] spreads it.
+    ///
+    /// The Jendersie-d'Eon blend is a diffraction lobe, HG(g_hg) of weight 1 - w (g_hg 0.988 at
+    /// 10 µm: a degree wide), plus a broad Draine lobe (asymmetry 0.73 at 10 µm). Delta-Eddington's
+    /// f = g² = 0.747 takes all of the first (0.518) and part of the second into the beam. Light
+    /// scattered within the diffraction lobe spreads exactly as HG lobes compose (HG(g₁) ⊛ HG(g₂)
+    /// = HG(g₁g₂)): the narrow part, spread g_hg. Light scattered in the Draine lobe is spread
+    /// by tens of degrees. Spreading all of f by one moment-matched width (0.991) put it on a
+    /// back-lit sphere's rim, 1° from the sun, 4 times the path tracer; a broad lobe there
+    /// has left the thin cap near the limb (docs/fidelity.md). A dual-lobe HG has no such
+    /// structure: its whole peak is narrow, spread by [`PhaseModel::peak_spread`].
+    pub fn beam_split(&self) -> (f32, f32) {
+        let g = self.asymmetry().clamp(0.0, 0.98);
+        let f = g * g;
         match *self {
             PhaseModel::JendersieDEon {
                 droplet_diameter_um,
             } => {
                 let p = jendersie_deon_params(droplet_diameter_um);
-                (1.0 - p.w_d) * p.g_hg + p.w_d * draine_g(p.g_d, p.alpha)
+                ((1.0 - p.w_d).min(f), p.g_hg)
+            }
+            PhaseModel::DualLobeHg { .. } => (f, self.peak_spread()),
+        }
+    }
+
+    /// The phase that sends toward the camera light scattered `n` (≥ 1, the mean count) times
+    /// in the broad part of the delta-Eddington peak ([`PhaseModel::beam_split`]): the Draine
+    /// lobe composed n times with itself, then the phase once more (its diffraction lobe leaves
+    /// the direction as it is, its Draine lobe composes once more). Compositions of the Draine
+    /// lobe are approximated by scaling its g by the lobe's own asymmetry per composition (as
+    /// HG lobes compose; its α cos²θ shape is kept). Normalised. The dual-lobe HG has no broad
+    /// part ([`PhaseModel::beam_split`] keeps its whole peak narrow): 0.
+    pub fn broad_phase(&self, cos_theta: f32, n: f32) -> f32 {
+        match *self {
+            PhaseModel::JendersieDEon {
+                droplet_diameter_um,
+            } => {
+                let p = jendersie_deon_params(droplet_diameter_um);
+                let s = draine_asymmetry(p.g_d, p.alpha);
+                let n = n.max(1.0);
+                (1.0 - p.w_d) * draine(cos_theta, p.g_d * s.powf(n - 1.0), p.alpha)
+                    + p.w_d * draine(cos_theta, p.g_d * s.powf(n), p.alpha)
+            }
+            PhaseModel::DualLobeHg { .. } => 0.0,
+        }
+    }
+
+    /// The asymmetry parameter g = ⟨cos θ⟩ (the phase's first Legendre moment), which is what
+    /// a P1 (Eddington) diffuse field sees of the phase. HG's is its g; Draine 2003's is
+    /// g (1 + α (3 + 2g²) / 5) / (1 + α (1 + 2g²) / 3).
+    pub fn asymmetry(&self) -> f32 {
+        match *self {
+            PhaseModel::JendersieDEon {
+                droplet_diameter_um,
+            } => {
+                let p = jendersie_deon_params(droplet_diameter_um);
+                (1.0 - p.w_d) * p.g_hg + p.w_d * draine_asymmetry(p.g_d, p.alpha)
             }
             PhaseModel::DualLobeHg {
                 g_forward,

@@ -23,6 +23,23 @@ pub fn headless(settings: Settings) -> Headless {
     h
 }
 
+/// The fidelity program's debug sphere (radius 1000 m, σt 0.02, albedo 0.999) at `center`,
+/// with no ambient and no haze: all its light is the sun's.
+pub fn debug_sphere(center: glam::Vec3) -> Settings {
+    let mut s = small_noise(1);
+    s.debug_density = nimbus::DebugDensity::Sphere {
+        center,
+        radius: 1_000.0,
+        density: 1.0,
+    };
+    s.weather.clouds.extinction = 0.02;
+    s.weather.clouds.albedo = 0.999;
+    s.weather.ambient_top = glam::Vec3::ZERO;
+    s.weather.ambient_bottom = glam::Vec3::ZERO;
+    s.haze.fade_distance = f32::INFINITY;
+    s
+}
+
 /// Small noise volumes keep the tests quick on software Vulkan.
 pub fn small_noise(seed: u32) -> Settings {
     Settings {
