@@ -827,8 +827,8 @@ fn main() -> Result<(), String> {
              moment both forward and back), 4 times the path tracer's rim (contrast 2.243, disc\n\
              1.320). Split (2026-12-05): the back-lit disc 0.819, its contrast 0.985. The broad\n\
              part spreads tens of degrees per scattering, and near the limb it has left the thin\n\
-             cap of medium the view ray crosses: shown with the narrow part's spread it made the\n\
-             rim brighter still (1.666 over the disc); left out, the disc read 0.740 and a slab\n\
+             cap of medium the view ray crosses: spread by the width its own second moment gives\n\
+             (0.997) it made the rim brighter still (1.666 over the disc); left out, the disc read 0.740 and a slab\n\
              seen 30° from the sun too dark (0.76 of an independent light tracer, below). The\n\
              split's cost on the noise views: FLIP 0.166 -> 0.170, 0.195 -> 0.200, 0.101 -> 0.101\n\
              (ratios 0.975 -> 1.013, 1.058 -> 1.070, 1.006 -> 1.039); none measurable in frame time\n\
