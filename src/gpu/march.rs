@@ -94,6 +94,7 @@ impl MarchUniforms {
         let (tx, tz) = tangent_basis(up);
         let s = settings;
         let (phase_params, phase_model) = s.lighting.phase.gpu_params();
+        let (narrow_weight, narrow_spread) = s.lighting.phase.beam_split();
         let (debug_mode, debug, sphere) = match s.debug_density {
             DebugDensity::Off => (0.0, [0.0; 4], [0.0; 4]),
             DebugDensity::Slab {
@@ -227,8 +228,8 @@ impl MarchUniforms {
                 s.lighting.phase.asymmetry().clamp(-0.98, 0.98),
                 // The delta-Eddington peak's narrow part: its spread per scattering and its weight
                 // (PhaseModel::beam_split, diffusion.wgsl's beam_light).
-                s.lighting.phase.beam_split().1,
-                s.lighting.phase.beam_split().0,
+                narrow_spread,
+                narrow_weight,
             ],
             shadow_light: [
                 flag(s.shadows.enabled && s.shadows.march_light),

@@ -135,7 +135,8 @@ fn delta_eddington_moments(
 /// Where a march sample sits in its column, and how it is lit and seen.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ColumnSample {
-    /// Optical depth toward the sun (the light march's).
+    /// Optical depth toward the sun (the light march's). [`delta_eddington_source`] reads it
+    /// through the beam light its caller passes ([`beam_light`]), not from here.
     pub tau_sun: f32,
     /// Optical depth above the sample, up to the column's sunlit top: in a layer, the light
     /// march's projected on the column, `tau_sun * mu0`.
