@@ -924,15 +924,23 @@ fn main() -> Result<(), String> {
              ones its photons travel, so it does not have the path tracer's fireflies). It agrees\n\
              with the HG 0.8 τ = 1 references within 1-2% (0.368 / 0.190 / 0.235 against 0.370 /\n\
              0.188 / 0.239, in the table's units) and its three seeds of 2·10⁶ photons with each\n\
-             other within 2%. Against it (views 90° / 55° / 20°) the march is, τ = 1: 1.307 / 1.639\n\
+             other within 2%. Against it (views 90° / 55° / 20°) the march was, τ = 1: 1.307 / 1.639\n\
              / 0.724 (sun 30°), 1.049 / 1.405 / 1.209 (sun 60°); τ = 5: 1.165 / 1.449 / 1.194,\n\
-             1.019 / 1.274 / 1.170 (before the beam's split 1.162 / 1.594 / 0.612, 0.963 / 1.320 /\n\
-             1.178, 1.110 / 1.440 / 1.134, 0.918 / 1.227 / 1.158). So these rows' misses are the\n\
-             model's, not the references' noise: light seen 65-95° from the sun, where this phase\n\
-             has its deep side-scattering minimum (the Draine lobe's 1 + α cos²θ, α = 22), comes out\n\
-             1.3-1.6 times too bright, and 130° (its backward rise) 0.6-0.7 times too dark. The\n\
-             thin columns' diffuse light is spread by a smooth lobe around the sun (HG of asymmetry\n\
-             g g'), which has neither. A lobe with the Draine shape fixed 55° (0.89, 1.03 at τ = 1)\n\
+             1.019 / 1.274 / 1.170: these rows' misses are the model's, not the references' noise.\n\
+             The thin columns' diffuse light was spread by a smooth lobe around the sun alone (HG\n\
+             of asymmetry g g'), the same on every view. A thin layer's once-scattered light is\n\
+             gathered over the optical path across it, brighter toward the horizon than the\n\
+             zenith (1 - e^{-τ*/|μ|}, over its flux-weighted mean so the column's flux out is\n\
+             unchanged), and the camera sees the directions the phase spreads around its view (their\n\
+             RMS |μ| by the addition theorem, √(1/3 + (μ² - 1/3) χ₂)): `thin_column_limb`\n\
+             (2026-12-05). Since, τ = 1: 1.149 / 1.461 / 0.790, 0.986 / 1.273 / 1.402; τ = 5: 1.141 /\n\
+             1.441 / 1.207, 0.994 / 1.263 / 1.189; the HG 0.8 τ = 1 rows (path tracer) 1.060 / 1.179 /\n\
+             0.863 -> 0.969 / 1.115 / 0.928 and 0.995 / 1.110 / 0.910 -> 0.949 / 1.049 / 0.986; the\n\
+             noise views FLIP 0.170 -> 0.164, 0.200 -> 0.200, 0.101 -> 0.100. Without the phase's\n\
+             spread (|μ| the view's own) the worst view went to 1.533. What is left: light 65-95°\n\
+             from the sun, where this phase has its deep side-scattering minimum (the Draine\n\
+             lobe's 1 + α cos²θ, α = 22), 1.27-1.46 times too bright; the lobe around the sun does\n\
+             not have the minimum. A lobe with the Draine shape fixed 55° (0.89, 1.03 at τ = 1)\n\
              but darkened 20° (0.66): not kept.\n",
         );
         md.push_str("\n## Pictures\n\n");

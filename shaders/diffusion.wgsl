@@ -121,7 +121,7 @@ fn broad_phase(model: u32, params: vec4f, cos_theta: f32, n: f32) -> f32 {
 // seen through the phase, I0 + g mu I1 in a thick column (mu: the light's direction toward the
 // camera against the downward vertical), the same energy in an HG lobe of asymmetry g g'
 // around the sun in a thin one, blended by 1 - e^{-tau*'}.
-fn delta_eddington_source(tau_above: f32, tau_below: f32, mu0: f32, mu_view: f32, cos_theta: f32, albedo: f32, g: f32, beam: f32, tau_across: f32) -> f32 {
+fn delta_eddington_source(tau_above: f32, tau_below: f32, mu0: f32, mu_view: f32, cos_theta: f32, albedo: f32, g: f32, chi2: f32, beam: f32, tau_across: f32) -> f32 {
     let w = clamp(albedo, 0.0, DE_MAX_ALBEDO);
     let m0 = max(mu0, 1e-3);
     let a = tau_above;
@@ -129,9 +129,34 @@ fn delta_eddington_source(tau_above: f32, tau_below: f32, mu0: f32, mu_view: f32
     let f = max(g, 0.0) * max(g, 0.0);
     let p1 = i.x + g * mu_view * i.y;
     let ge = g * (g - f) / (1.0 - f);
-    let lobe = 4.0 * PI * i.x * henyey_greenstein(cos_theta, ge);
+    let lobe = 4.0 * PI * i.x * henyey_greenstein(cos_theta, ge) * thin_column_limb(a + tau_below, w, f, mu_view, chi2);
     let thick = 1.0 - exp(-(a + tau_below) * (1.0 - w * f));
     return max(beam + mix(lobe, p1, thick), 0.0);
+}
+
+// How much brighter than its flux-weighted mean over directions a thin column's diffuse light
+// is toward the camera (thin_column_limb in src/lighting/diffusion.rs): 1 - e^{-tau*/|mu|} over
+// that mean, tau* the column's scaled optical thickness, |mu| the RMS cosine with the vertical of
+// the directions the phase (second moment chi2) scatters toward the camera.
+fn thin_column_limb(tau_column: f32, w: f32, f: f32, mu_view: f32, chi2: f32) -> f32 {
+    let t = max(tau_column * (1.0 - w * f), 1e-4);
+    let mu = sqrt(max(1.0 / 3.0 + (mu_view * mu_view - 1.0 / 3.0) * chi2, 0.0));
+    let along = 1.0 - exp(-t / max(mu, 0.1));
+    let mean = 1.0 - 0.5 * (0.125 * exp(-t / 0.125) + 0.375 * exp(-t / 0.375) + 0.625 * exp(-t / 0.625) + 0.875 * exp(-t / 0.875));
+    return along / mean;
+}
+
+// The phase's second Legendre moment (PhaseModel::second_moment): model and params as
+// phase_eval's.
+fn phase_second_moment(model: u32, params: vec4f) -> f32 {
+    if (model == 0u) {
+        let g = params.y;
+        let c2 = (1.0 + 2.0 * g * g) / 3.0;
+        let c4 = (7.0 + 20.0 * g * g + 8.0 * g * g * g * g) / 35.0;
+        let cos2 = (c2 + params.z * c4) / (1.0 + params.z * c2);
+        return (1.0 - params.w) * params.x * params.x + params.w * (3.0 * cos2 - 1.0) / 2.0;
+    }
+    return params.w * params.x * params.x + (1.0 - params.w) * params.y * params.y;
 }
 
 // The share of `ambient_top` in the ambient light inside a column with optical depths `above`

@@ -183,6 +183,7 @@ fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, sigma_t: f32, tau_view: f32,
     let albedo = u.shape.w;
     let g = u.ms_model.y;
     let beam = beam_light(u32(u.misc.y), u.phase, cos_theta, tau_sun, albedo, g, u.ms_model.z, u.ms_model.w);
+    let chi2 = phase_second_moment(u32(u.misc.y), u.phase);
     if (debug_mode() == DEBUG_SPHERE) {
         let offset = p - u.debug_sphere.xyz;
         let r = length(offset);
@@ -196,10 +197,10 @@ fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, sigma_t: f32, tau_view: f32,
         let w_out = clamp(0.5 + 0.5 * c / DE_MIN_MU0, 0.0, 1.0);
         var light = 0.0;
         if (w_out > 0.0) {
-            light += w_out * delta_eddington_source(min(outward, tau_sun), inward, max(c, DE_MIN_MU0), mu_view, cos_theta, albedo, g, beam, across);
+            light += w_out * delta_eddington_source(min(outward, tau_sun), inward, max(c, DE_MIN_MU0), mu_view, cos_theta, albedo, g, chi2, beam, across);
         }
         if (w_out < 1.0) {
-            light += (1.0 - w_out) * delta_eddington_source(min(inward, tau_sun), outward, max(-c, DE_MIN_MU0), -mu_view, cos_theta, albedo, g, beam, across);
+            light += (1.0 - w_out) * delta_eddington_source(min(inward, tau_sun), outward, max(-c, DE_MIN_MU0), -mu_view, cos_theta, albedo, g, chi2, beam, across);
         }
         return vec2f(light, 0.5);
     }
@@ -225,7 +226,7 @@ fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, sigma_t: f32, tau_view: f32,
     // farther than the ray's own optical depth (for a slab, never closer than the column: no
     // change).
     below = mix(below, min(below, tau_view), smoothstep(0.0, 0.5, cos_theta));
-    let light = delta_eddington_source(tau_sun * mu0, below, mu0, mu_view, cos_theta, albedo, g, beam, 1e30);
+    let light = delta_eddington_source(tau_sun * mu0, below, mu0, mu_view, cos_theta, albedo, g, chi2, beam, 1e30);
     return vec2f(light, ambient_share);
 }
 

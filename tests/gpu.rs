@@ -533,7 +533,7 @@ fn delta_eddington_in_the_march_matches_its_cpu_mirror() {
                     tau_across: f32::INFINITY,
                 };
                 let beam = beam_light(&phase, cos_theta, column.tau_sun, albedo);
-                let ms = delta_eddington_source(&column, albedo, g, beam);
+                let ms = delta_eddington_source(&column, albedo, g, phase.second_moment(), beam);
                 l += ((-extinction * s).exp() * albedo * extinction * 10.0 * ms * ds) as f64;
             }
             let i = (y * W + x) as usize;
