@@ -141,13 +141,18 @@ fn sun_optical_depth(p: vec3f, n: u32, footprint: f32) -> f32 {
 // 0.186, overcast 0.188 -> 0.187, sparse from above 0.111 -> 0.111. A probe at 0.25 gave
 // 0.184 / 0.188 / 0.114, at 0.45 0.189 / 0.182 / 0.110, two (0.25 and 0.6) 0.186 / 0.188 /
 // 0.108 for another density call per view sample.
-fn column_below(p: vec3f, local_up: vec3f, sigma_t: f32, footprint: f32) -> f32 {
+// The probe's place is the ray's `jitter` spread over 0.1 to 0.6 of the way down (0.35 on
+// average, exactly 0.35 with the jitter off): at one fixed place it followed the noise
+// textures' texel rows as the sample rose, and near cumulus showed them as horizontal streaks
+// in the diffuse light (2026-12-05); the temporal accumulation averages it over the stretch.
+fn column_below(p: vec3f, local_up: vec3f, sigma_t: f32, footprint: f32, jitter: f32) -> f32 {
     let h = altitude(p, u.planet.xyz, u.planet.w);
     if (debug_mode() == DEBUG_SLAB) {
         return max(h - u.debug.x, 0.0) * sigma_t;
     }
     let depth = max(h - u.layer.x, 0.0);
-    return depth * sample_density(p - local_up * (0.35 * depth), false, footprint) * u.shape.z;
+    let probe = 0.1 + 0.5 * jitter;
+    return depth * sample_density(p - local_up * (probe * depth), false, footprint) * u.shape.z;
 }
 
 // Optical distance (m) from p inside the debug sphere to its surface along d.
@@ -179,7 +184,7 @@ fn sphere_exit(p: vec3f, d: vec3f) -> f32 {
 //
 // Returns (the source, the share of the sky above in the column's ambient: see
 // column_ambient_share).
-fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, sigma_t: f32, tau_view: f32, cos_theta: f32, footprint: f32) -> vec2f {
+fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, sigma_t: f32, tau_view: f32, cos_theta: f32, footprint: f32, jitter: f32) -> vec2f {
     let albedo = u.shape.w;
     let g = u.ms_model.y;
     let beam = beam_light(u32(u.misc.y), u.phase, cos_theta, tau_sun, albedo, g, u.ms_model.z, u.ms_model.w);
@@ -207,7 +212,7 @@ fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, sigma_t: f32, tau_view: f32,
     let local_up = normalize(p + u.planet.xyz * u.planet.w);
     let mu0 = max(dot(u.sun.xyz, local_up), DE_MIN_MU0);
     let mu_view = dot(dir, local_up);
-    let column = column_below(p, local_up, sigma_t, footprint);
+    let column = column_below(p, local_up, sigma_t, footprint, jitter);
     // Looking up, the view ray's own optical depth since it entered the cloud, projected on the
     // vertical, is the column below as the ray measured it. Blended in over the first 15° above
     // the horizon (no seam at the horizon).
@@ -442,7 +447,7 @@ fn march_layer(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32
             // (column_ambient_share) with delta-Eddington in the noise model.
             var hf = clamp((altitude(p, up, radius) - u.layer.x) / thickness, 0.0, 1.0);
             if (delta_eddington_on) {
-                let column = column_light(p, dir, tau, sigma_t, sample_tau_view, cos_theta, footprint);
+                let column = column_light(p, dir, tau, sigma_t, sample_tau_view, cos_theta, footprint, jitter);
                 ms += column.x;
                 hf = select(hf, column.y, debug_mode() == DEBUG_OFF);
             }

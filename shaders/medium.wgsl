@@ -32,7 +32,7 @@ struct MarchUniforms {
     pattern: vec4f,         // this frame's offset in the block (x, y), visit index, unused
     opts: vec4f,            // coarse-then-fine, distance-grown steps, noise LOD, light LOD (0/1)
     viewport: vec4f,        // the rectangle of the scene targets rendered: x, y, width, height (px)
-    ms_model: vec4f,        // multiple scattering: 0 single, 1 octaves, 2 delta-Eddington; y: phase g; z: peak spread
+    ms_model: vec4f,        // multiple scattering: 0 single, 1 octaves, 2 delta-Eddington; y: phase g; z: the beam's narrow spread, w: its narrow weight (PhaseModel::beam_split)
     shadow_light: vec4f,    // light from the cloud shadow map (0/1), local distance (m), local steps, unused
 }
 
@@ -125,14 +125,15 @@ fn sample_density(p: vec3f, cheap: bool, footprint: f32) -> f32 {
     // all, above the tops, below the bases) the density is exactly 0 without the base or detail
     // noise: a GPU skips the fetches there (llvmpipe runs them under a mask all the same).
     let profiles = layer_profiles(hf, types);
-    if (!layers_can_cloud(profiles, coverage)) {
+    let cumulus = cumuliform_weights(types);
+    if (!layers_can_cloud(profiles, coverage, cumulus)) {
         return 0.0;
     }
     // Wind shear: higher parts of a cloud lean downwind.
     let sheared = horizontal_of(p + u.skew.xyz * hf);
     let q = vec3f(sheared.x + u.wind.z, h, sheared.y + u.wind.w);
     let base = textureSampleLevel(base_tex, noise_sampler, q * u.scales.x, lod_for(footprint, base_texel));
-    let b = profiled_base_density(hf, base, coverage, profiles, u.layer.z);
+    let b = profiled_base_density(hf, base, coverage, profiles, cumulus, u.layer.z);
     if (b <= 0.0 || cheap) {
         return b * u.shape.y;
     }

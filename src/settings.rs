@@ -115,7 +115,8 @@ pub struct NoiseSettings {
     pub blue_noise_size: u32,
     /// Size in meters of one tile of the base-shape volume. Default 14 000.
     pub base_scale: f32,
-    /// Size in meters of one tile of the detail volume. Default 1 800.
+    /// Size in meters of one tile of the detail volume. Default 900: its Worley cells (2, 4
+    /// and 6 to a tile) are 450, 225 and 150 m, the size of a cumulus's turrets.
     pub detail_scale: f32,
     /// Size in meters of one (tileable) weather-map tile. Default 60 000.
     pub weather_extent: f32,
@@ -441,7 +442,7 @@ impl Default for NoiseSettings {
             weather_size: 512,
             blue_noise_size: 64,
             base_scale: 14_000.0,
-            detail_scale: 1_800.0,
+            detail_scale: 900.0,
             weather_extent: 60_000.0,
         }
     }

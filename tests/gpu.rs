@@ -362,15 +362,19 @@ fn depth_conventions_see_the_same_clouds() {
             moved * 200 < got.len(),
             "{depth:?}: {moved} pixels moved by > 0.02"
         );
-        // Pixels the ridge hides keep the ridge in every convention.
-        for (i, d) in scene.depth.iter().enumerate() {
-            if *d < 1.0 {
-                assert!(
-                    (got[i][0] - reference[i][0]).abs() < 0.02,
-                    "{depth:?}: occluded pixel {i}"
-                );
-            }
-        }
+        // Pixels the ridge hides keep the ridge in every convention: a misread depth would
+        // march past it (or stop short) on most of them. Clouds in front of the ridge move
+        // as sky pixels do (a step more or less), so single pixels may: judge their share.
+        let occluded: Vec<usize> = (0..got.len()).filter(|&i| scene.depth[i] < 1.0).collect();
+        let occluded_moved = occluded
+            .iter()
+            .filter(|&&i| (got[i][0] - reference[i][0]).abs() >= 0.02)
+            .count();
+        assert!(
+            occluded_moved * 200 < occluded.len(),
+            "{depth:?}: {occluded_moved} of {} occluded pixels moved",
+            occluded.len()
+        );
     }
     // The depth buffer does matter here: without it the image differs (so the agreement above
     // is not that of conventions all ignoring depth).

@@ -144,16 +144,40 @@ pub fn layered_base_density(
     best * layer_softening(h, softness)
 }
 
+/// The range the carved base noise spans over the baked volume (1st to 99th percentile):
+/// density.wgsl's `CARVED_LOW` / `CARVED_HIGH`. Cumuliform layers stretch it to [0, 1].
+pub const CARVED_RANGE: (f32, f32) = (0.68, 0.87);
+
+/// How cumuliform a layer of cloud type `cloud_type` is (density.wgsl's
+/// `cumuliform_weights`): 0 up to stratocumulus (1/3), 1 from cumulus (2/3), smoothstep between.
+pub fn cumuliform_weight(cloud_type: f32) -> f32 {
+    let t = saturate((cloud_type - 1.0 / 3.0) * 3.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
 /// One layer's base shape for the carved noise `carved`: coverage `c` erodes the shape under
 /// the layer's height profile, so only the densest parts survive low coverage (none where `c`
 /// is 0).
+///
+/// The carved noise spans only [`CARVED_RANGE`]: thresholded against 1 - c as it is, the
+/// height profile and not the 3D noise decides where a cloud ends (flat lids, soft horizontal
+/// layers; near cumulus read as cotton). Cumuliform layers stretch it to [0, 1], so that the
+/// noise's cells carve the outline and its gradient, five times steeper, the edges, and take
+/// their coverage through c (2 - c), which keeps a coverage's cloud fraction about what it was.
+/// Stratiform decks keep the narrow range (stretched, an overcast deck at coverage 0.999 fell
+/// apart into holes).
 fn layer_cloud(carved: f32, h: f32, c: f32, cloud_type: f32) -> f32 {
     if c <= 0.0 {
         return 0.0;
     }
+    let cumulus = cumuliform_weight(cloud_type);
+    let (lo, hi) = CARVED_RANGE;
+    let stretched = saturate((carved - lo) / (hi - lo));
+    let shaped = carved + (stretched - carved) * cumulus;
+    let covered = c + (c * (2.0 - c) - c) * cumulus;
     saturate(remap(
-        carved * height_profile(h, cloud_type),
-        1.0 - c,
+        shaped * height_profile(h, cloud_type),
+        1.0 - covered,
         1.0,
         0.0,
         1.0,
@@ -287,6 +311,33 @@ mod tests {
         assert!(skipped_with_coverage > 1000, "{skipped_with_coverage}");
         // ...and never where a layer's profile peaks under full coverage.
         assert!(layers_can_cloud(0.3, [1.0, 0.0, 0.0], [0.5, 0.0, 0.0]));
+    }
+
+    /// Cumulus are carved by their noise, not by their height profile: across the range the
+    /// carved noise spans, a cumulus layer's base shape at coverage 0.4 runs from none to most
+    /// of full, a stratus layer's stays cloud everywhere (its noise only modulates it).
+    #[test]
+    fn cumulus_are_carved_by_their_noise() {
+        // carved = (r - (fbm - 1)) / (2 - fbm): with the Worley fBM at 0.5, r = 1.5 carved - 0.5.
+        let texel = |carved: f32| [1.5 * carved - 0.5, 0.5, 0.5, 0.5];
+        let at = |carved: f32, h: f32, t: f32| {
+            layered_base_density(h, texel(carved), [0.4, 0.0, 0.0], [t, 0.0, 0.0], 0.0)
+        };
+        let (lo, hi) = CARVED_RANGE;
+        // Cumulus (2/3) where its profile is full (h 0.3).
+        assert_eq!(at(lo + 0.01, 0.3, 2.0 / 3.0), 0.0);
+        assert!(at(0.5 * (lo + hi), 0.3, 2.0 / 3.0) > 0.0);
+        assert!(at(hi, 0.3, 2.0 / 3.0) > 0.6, "{}", at(hi, 0.3, 2.0 / 3.0));
+        // Stratus (0) where its profile is full (h 0.05): cloud across the whole range.
+        for k in 0..=10 {
+            let carved = lo + (hi - lo) * k as f32 / 10.0;
+            let d = at(carved, 0.05, 0.0);
+            assert!(d > 0.15 && d < 0.7, "stratus at carved {carved}: {d}");
+        }
+        assert_eq!(cumuliform_weight(0.0), 0.0);
+        assert_eq!(cumuliform_weight(1.0 / 3.0), 0.0);
+        assert!((cumuliform_weight(0.5) - 0.5).abs() < 1e-6);
+        assert_eq!(cumuliform_weight(2.0 / 3.0), 1.0);
     }
 
     #[test]
