@@ -849,7 +849,7 @@ fn main() -> Result<(), String> {
              The noise-model views are judged on the layer column, with the march's noise LOD\n\
              off: at 64×36 a pixel's footprint is 20 times a 1280×720 frame's, and the coarse mips\n\
              showed the march a thinner medium than the path tracer's mip 0. The column below a\n\
-             sample is probed (`column_below`): the full density 0.35 of the way down to the\n\
+             sample is probed (`column_below`): the full density 0.1-0.6 of the way down to the\n\
              layer's base, so a tower's top stands on its body and a wisp on its side on little.\n\
              Their FLIP is not the reconstruction's: the\n\
              unoptimised march (`--quality ultra`, every pixel every frame, no early exit) scored as\n\

@@ -131,7 +131,8 @@ fn sun_optical_depth(p: vec3f, n: u32, footprint: f32) -> f32 {
 
 // Optical depth straight down from p (density sigma_t there) to the bottom of a layer, for
 // the independent-column diffuse model: exact for the debug slab. For the noise model the
-// density below is probed once, 0.35 of the way down to the layer's base (the full density,
+// density below is probed once, 0.1-0.6 of the way down to the layer's base (0.35 on average:
+// the place, below; the full density,
 // detail included): the top of a tower stands on its body, a wisp on a tower's side or a thin
 // cloud's top on little or nothing. Before (2026-12-04) the column was taken as dense as the
 // sample all the way down, which stood every thin part on a thick column: from 12 km above

@@ -355,12 +355,12 @@ fn the_answer_is_deterministic_and_follows_the_sun_and_the_weather() {
     let low = ambient_at(&mut h, eye, low_sun);
     assert_ne!(first.above.cloud_irradiance, low.above.cloud_irradiance);
     // The visibility is the clouds' transmittance: the sun changes only which directions the
-    // sun-lobe rays sample it in (the quadrature's error, which the probe's test against the
-    // picture bounds by 0.02: cumulus carved by their 3D noise, since 2026-12-05, vary more
-    // from one direction to the next, and V moved 0.0085 here, 0.0003 before).
+    // sun-lobe rays sample it in (the quadrature's error). Cumulus carved by their 3D noise
+    // (since 2026-12-05) vary more from one direction to the next: V moved 4.1% here (0.1862 ->
+    // 0.1939), 0.04% before (0.2263 -> 0.2262).
     let (v0, v1) = (first.above.sky_visibility, low.above.sky_visibility);
     println!("V with the default sun {v0:.4}, with a low sun {v1:.4}");
-    assert!((v0 - v1).abs() < 0.02, "V {v0} -> {v1}");
+    assert!((v0 - v1).abs() < 0.07 * v0, "V {v0} -> {v1}");
 
     // A transition to clear sky: visibility rises to 1, through values in between.
     h.renderer_mut()

@@ -364,12 +364,17 @@ fn depth_conventions_see_the_same_clouds() {
         );
         // Pixels the ridge hides keep the ridge in every convention: a misread depth would
         // march past it (or stop short) on most of them. Clouds in front of the ridge move
-        // as sky pixels do (a step more or less), so single pixels may: judge their share.
+        // as sky pixels do (a step more or less), so single pixels may: judge their share
+        // (measured 2 of 1868 in each convention).
         let occluded: Vec<usize> = (0..got.len()).filter(|&i| scene.depth[i] < 1.0).collect();
         let occluded_moved = occluded
             .iter()
             .filter(|&&i| (got[i][0] - reference[i][0]).abs() >= 0.02)
             .count();
+        println!(
+            "{depth:?}: {occluded_moved} of {} occluded pixels moved by 0.02 or more",
+            occluded.len()
+        );
         assert!(
             occluded_moved * 200 < occluded.len(),
             "{depth:?}: {occluded_moved} of {} occluded pixels moved",

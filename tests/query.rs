@@ -62,10 +62,10 @@ fn density_on_the_cpu_matches_the_gpu_at_a_thousand_points() {
     let errors: Vec<f32> = cpu.iter().zip(&gpu).map(|(c, g)| (c - g).abs()).collect();
     let mean = errors.iter().sum::<f32>() / errors.len() as f32;
     let max = errors.iter().copied().fold(0.0f32, f32::max);
-    let within = errors.iter().filter(|e| **e <= 0.05).count();
+    let within = errors.iter().filter(|e| **e <= 0.01).count();
     let cloudy = gpu.iter().filter(|g| **g > 0.0).count();
     println!(
-        "density: {cloudy} of 1000 points in cloud; |cpu - gpu| mean {mean:.2e}, max {max:.3}, {within} within 0.05"
+        "density: {cloudy} of 1000 points in cloud; |cpu - gpu| mean {mean:.2e}, max {max:.3}, {within} within 0.01"
     );
     assert!(
         cloudy > 100,
@@ -74,14 +74,14 @@ fn density_on_the_cpu_matches_the_gpu_at_a_thousand_points() {
     // The GPU filters 8-bit texels with its own weight precision; the model's remaps amplify
     // that near their edges, so a few points differ by more than the rest. Cumuliform layers
     // stretch the carved noise by 1 / (0.87 - 0.68) = 5.3 (profile::CARVED_RANGE), and the
-    // error with it: before the stretch mean 2e-3 and 0.01 held, since, mean 2.6e-3 and max
-    // 0.030 (904 points within 0.01).
+    // error with it: before the stretch mean 9.4e-4, max 0.013 and 998 points within 0.01
+    // (docs/cloud-queries.md); since, mean 2.6e-3, max 0.030 and 904 within 0.01.
     assert!(mean < 4e-3, "mean |cpu - gpu| {mean}");
     assert!(
-        within >= 990,
-        "only {within} of 1000 points within 0.05 (max {max})"
+        within >= 850,
+        "only {within} of 1000 points within 0.01 (max {max})"
     );
-    assert!(max < 0.1, "max |cpu - gpu| {max}");
+    assert!(max < 0.06, "max |cpu - gpu| {max}");
 }
 
 #[test]

@@ -209,10 +209,16 @@ fn each_optimisation_stays_close_to_the_plain_march() {
         show(&mut h, &view, 0.0);
         let got = h.read_output().unwrap();
         let mean = mean_difference(&reference, &got);
-        // 0.01 held until cumulus were carved by their noise (2026-12-05: the carved noise
-        // stretched 5.3 times, profile::CARVED_RANGE): sharper outlines move more under
-        // longer far steps; measured then 0.0109 for the distance-grown steps.
-        assert!(mean < 0.015, "{name}: mean difference {mean}");
+        println!("{name}: mean difference {mean:.4}");
+        // 0.01 each, but the distance-grown steps since cumulus were carved by their noise
+        // (2026-12-05: the carved noise stretched 5.3 times, profile::CARVED_RANGE): sharper
+        // outlines move more under longer far steps, measured then 0.0109.
+        let budget = if name == "distance_steps" {
+            0.015
+        } else {
+            0.01
+        };
+        assert!(mean < budget, "{name}: mean difference {mean}");
         assert!(got.iter().flatten().all(|v| v.is_finite()), "{name}: NaN");
         let stats = h.read_ray_stats().unwrap();
         if name == "coarse_then_fine" {
