@@ -18,7 +18,7 @@ use glam::{DVec2, Vec2, Vec3};
 use crate::atmosphere::{altitude, Shell};
 use crate::error::{Error, Result};
 use crate::settings::{DebugDensity, Settings};
-use crate::weather::profile::{eroded_density, layered_base_density, layers_can_cloud};
+use crate::weather::profile::{eroded_density, layered_base_density, layers_can_cloud, smoothstep};
 use crate::weather::{Timeline, WeatherSample};
 
 /// An RGBA8 texture as read back, sampled like the GPU's repeat / linear sampler.
@@ -90,11 +90,6 @@ pub struct CloudQuery {
     data: Arc<QueryData>,
     /// The camera the horizon gradient is measured from.
     camera: Vec3,
-}
-
-fn smoothstep(e0: f32, e1: f32, x: f32) -> f32 {
-    let t = ((x - e0) / (e1 - e0)).clamp(0.0, 1.0);
-    t * t * (3.0 - 2.0 * t)
 }
 
 /// The wind offset as the march's uniforms carry it (wrapped to a tile): the same f32 values.

@@ -25,6 +25,12 @@ fn saturate(v: f32) -> f32 {
     v.clamp(0.0, 1.0)
 }
 
+/// WGSL's `smoothstep`: 0 below `e0`, 1 above `e1`, the cubic 3t² - 2t³ between.
+pub(crate) fn smoothstep(e0: f32, e1: f32, x: f32) -> f32 {
+    let t = saturate((x - e0) / (e1 - e0));
+    t * t * (3.0 - 2.0 * t)
+}
+
 /// A vertical profile as fractions of the layer height: density ramps up from `base` to
 /// `full_bottom`, stays 1 to `full_top`, and falls to 0 at `top`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -151,8 +157,7 @@ pub const CARVED_RANGE: (f32, f32) = (0.68, 0.87);
 /// How cumuliform a layer of cloud type `cloud_type` is (density.wgsl's
 /// `cumuliform_weights`): 0 up to stratocumulus (1/3), 1 from cumulus (2/3), smoothstep between.
 pub fn cumuliform_weight(cloud_type: f32) -> f32 {
-    let t = saturate((cloud_type - 1.0 / 3.0) * 3.0);
-    t * t * (3.0 - 2.0 * t)
+    smoothstep(1.0 / 3.0, 2.0 / 3.0, cloud_type)
 }
 
 /// One layer's base shape for the carved noise `carved`: coverage `c` erodes the shape under
