@@ -974,7 +974,31 @@ fn main() -> Result<(), String> {
              0.065): the same lateral transport the side-lit sphere misses (0.76), the light that\n\
              enters a cloud's sunlit side and leaves through the side the camera sees. The billows\n\
              are still smooth inside the outline: the detail only erodes where the base shape is\n\
-             thin, and multiple scattering evens out the rest (the octaves, darker, show more of it).\n",
+             thin, and multiple scattering evens out the rest (the octaves, darker, show more of it).\n\n\
+             The column below, looking up (2026-12-05). A camera looking up bounded the column below\n\
+             a sample by the view ray's own optical depth since it entered the cloud, projected on\n\
+             the vertical: exact for a layer seen from below, and needed while the column was taken\n\
+             as dense as the sample all the way down. Cumulus seen from below at an angle are\n\
+             entered through their sides, and the bound took a sample just inside a side wall for\n\
+             one just above the base; the probe (`column_below`) now decides alone. Same references:\n\
+             sparse from the ground FLIP 0.136 -> 0.124 (ratio 0.936 -> 1.015), the close-up 0.125 ->\n\
+             0.116 (0.753 -> 0.782), overcast 0.193 -> 0.200 (its floor 0.195; 1.075 -> 1.091), from\n\
+             above unchanged (0.121); half the bound scored between, the view ray's depth unprojected\n\
+             0.133 / 0.122. The slabs moved by at most 0.02 (τ = 50, HG, sun 30°, the 20° view 1.102 ->\n\
+             1.123): seen from below the bound was their column, up to the whole steps the view\n\
+             ray's depth counted at the slab's base.\n\
+             Tried and not kept for the close-up, whose sunlit faces are the darkest part of it (0.69\n\
+             of the path tracer where the big cloud faces the sun, about 1.0 on the far clouds): the\n\
+             column lit at no less than the cosine 2/3 (a convex body's flux-weighted mean over its\n\
+             lit side) raised the close-up to 0.906 but its FLIP to 0.131; the column's field averaged\n\
+             over six light marches 200 m to the sides of the sample (lateral transport, brute force)\n\
+             0.130; a second column through a density probe above the sample (its top from the layer's\n\
+             top) darkened everything (overcast 0.64). A caution on FLIP against these references:\n\
+             scaled uniformly, the close-up march scores best at 1.05-1.1 times its level (0.124),\n\
+             although its mean is 0.75 of the reference's; the reference's fireflies make its typical\n\
+             pixel darker than its mean, and FLIP rewards the typical pixel. One half of the\n\
+             samples against the merged reference scores 0.042 (close-up) / 0.044 (ground) / 0.054\n\
+             (above): what a perfect, noise-free march would score is about that.\n",
         );
         md.push_str("\n## Pictures\n\n");
         let mut names: Vec<String> = std::fs::read_dir(&dir)
