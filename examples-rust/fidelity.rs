@@ -998,7 +998,9 @@ fn main() -> Result<(), String> {
              although its mean is 0.75 of the reference's; the reference's fireflies make its typical\n\
              pixel darker than its mean, and FLIP rewards the typical pixel. One half of the\n\
              samples against the merged reference scores 0.042 (close-up) / 0.044 (ground) / 0.054\n\
-             (above): what a perfect, noise-free march would score is about that.\n",
+             (above): what a perfect, noise-free march would score is about that. The coarse\n\
+             steps' step back over the step before a hit (docs/performance.md, the same day) moved\n\
+             the noise views to 0.123 / 0.200 / 0.124 / 0.115 (ratios 1.002 / 1.090 / 0.997 / 0.778).\n",
         );
         md.push_str("\n## Pictures\n\n");
         let mut names: Vec<String> = std::fs::read_dir(&dir)

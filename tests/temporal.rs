@@ -213,10 +213,13 @@ fn each_optimisation_stays_close_to_the_plain_march() {
         // 0.01 each, but the distance-grown steps since cumulus were carved by their noise
         // (2026-12-05: the carved noise stretched 5.3 times, profile::CARVED_RANGE): sharper
         // outlines move more under longer far steps, measured then 0.0109.
-        let budget = if name == "distance_steps" {
-            0.015
-        } else {
-            0.01
+        // The coarse steps skip only what is empty: measured 0.0004 since a hit steps back over
+        // the coarse step before it too (2026-12-05); 0.0024 when it stepped back only to its
+        // own step and lost, by the jitter, part of the cloud each ray entered.
+        let budget = match name {
+            "distance_steps" => 0.015,
+            "coarse_then_fine" => 0.0015,
+            _ => 0.01,
         };
         assert!(mean < budget, "{name}: mean difference {mean}");
         assert!(got.iter().flatten().all(|v| v.is_finite()), "{name}: NaN");
