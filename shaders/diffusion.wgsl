@@ -5,6 +5,10 @@
 const DE_MAX_ALBEDO: f32 = 0.999999;
 // The least sun cosine a column is lit at (about 17°; see march.wgsl).
 const DE_MIN_MU0: f32 = 0.3;
+// The share of a column's scaled optical thickness that light scattered once crosses on its
+// way out toward a camera below, which sets the blend from the thin lobe to the P1 field; the
+// whole column toward a camera above (DIFFUSE_CROSSING in src/lighting/diffusion.rs).
+const DE_DIFFUSE_CROSSING: f32 = 0.5;
 
 // j0,1, the first zero of J0: a cylinder of radius a has the transverse buckling j0,1 / a.
 const BESSEL_J0_FIRST_ZERO: f32 = 2.4048256;
@@ -130,7 +134,8 @@ fn delta_eddington_source(tau_above: f32, tau_below: f32, mu0: f32, mu_view: f32
     let p1 = i.x + g * mu_view * i.y;
     let ge = g * (g - f) / (1.0 - f);
     let lobe = 4.0 * PI * i.x * henyey_greenstein(cos_theta, ge) * thin_column_limb(a + tau_below, w, f, mu_view, chi2);
-    let thick = 1.0 - exp(-(a + tau_below) * (1.0 - w * f));
+    let crossing = mix(1.0, DE_DIFFUSE_CROSSING, smoothstep(-0.25, 0.25, mu_view));
+    let thick = 1.0 - exp(-(a + tau_below) * (1.0 - w * f) * crossing);
     return max(beam + mix(lobe, p1, thick), 0.0);
 }
 
