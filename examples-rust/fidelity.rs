@@ -224,6 +224,7 @@ fn reference_cache(
     key.lighting.light_steps = 8;
     key.lighting.light_step_growth = 1.6;
     key.lighting.light_lod = true;
+    key.lighting.light_distance = 3_000.0;
     // How a weather map is spread over frames changes no texel of it.
     key.weather_map_texels_per_frame = 32_768;
     let mut hasher = std::collections::hash_map::DefaultHasher::new();
