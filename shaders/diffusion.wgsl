@@ -124,7 +124,8 @@ fn broad_phase(model: u32, params: vec4f, cos_theta: f32, n: f32) -> f32 {
 // light the delta scaling keeps in the beam (`beam`, beam_light's); the diffuse field
 // seen through the phase, I0 + g mu I1 in a thick column (mu: the light's direction toward the
 // camera against the downward vertical), the same energy in an HG lobe of asymmetry g g'
-// around the sun in a thin one, blended by 1 - e^{-tau*'}.
+// around the sun in a thin one, blended by 1 - e^{-c tau*'} (c = DE_DIFFUSE_CROSSING for a
+// camera below the sample, 1 for one above).
 fn delta_eddington_source(tau_above: f32, tau_below: f32, mu0: f32, mu_view: f32, cos_theta: f32, albedo: f32, g: f32, chi2: f32, beam: f32, tau_across: f32) -> f32 {
     let w = clamp(albedo, 0.0, DE_MAX_ALBEDO);
     let m0 = max(mu0, 1e-3);

@@ -52,7 +52,7 @@ pub const MAX_ALBEDO: f32 = 1.0 - 1e-6;
 /// too the slab of τ = 5 at μ0 = 0.5 reflected 0.371 of the light instead of 0.414, sparse
 /// cumulus from 12 km above came out 0.952 of the path tracer instead of 0.997, and the model
 /// lost 17% of the light in all (the_march_of_the_model_sends_out_no_more_than_comes_in).
-pub const DIFFUSE_CROSSING: f32 = 0.5;
+pub(crate) const DIFFUSE_CROSSING: f32 = 0.5;
 
 /// j₀,₁, the first zero of the Bessel function J₀: the transverse buckling of a cylinder of
 /// radius a is j₀,₁ / a.
@@ -249,8 +249,8 @@ fn peak_scatterings(m: f32) -> [f32; 4] {
 ///   delta scaling, g' = g / (1 + g), seen through the phase once more), brighter toward the
 ///   horizon than the zenith as a thin layer's once-scattered light is ([`thin_column_limb`]).
 ///   The two are blended by the chance that once-scattered light scatters again on its way
-///   out, 1 - e^{-c τ*'}, c = [`DIFFUSE_CROSSING`] of the column's scaled optical thickness looking
-///   up, the whole of it looking down.
+///   out, 1 - e^{-c τ*'}: c = `DIFFUSE_CROSSING` of the column's scaled optical thickness
+///   looking up, the whole of it looking down.
 pub fn delta_eddington_source(c: &ColumnSample, albedo: f32, g: f32, chi2: f32, beam: f32) -> f32 {
     let ColumnSample {
         tau_sun: _,
