@@ -515,7 +515,6 @@ mod tests {
     /// march integrates the model's source (single scattering of the scaled beam included)
     /// along every outgoing direction, plus the direct beam transmitted.
     fn marched_out_flux(tau: f32, mu0: f32, albedo: f32, g: f32) -> f64 {
-        use crate::lighting::phase::henyey_greenstein;
         let (n_mu, n_phi, n_t) = (48, 48, 400);
         let sun_h = (1.0 - mu0 * mu0).sqrt();
         let mut out = 0.0f64;
@@ -526,29 +525,13 @@ mod tests {
                 for j in 0..n_phi {
                     let phi = (j as f32 + 0.5) / n_phi as f32 * 2.0 * PI;
                     let cos_theta = mu_down * mu0 + (1.0 - mu * mu).sqrt() * sun_h * phi.cos();
-                    let phase = henyey_greenstein(cos_theta, g);
                     let mut radiance = 0.0f64;
                     for k in 0..n_t {
                         let depth = (k as f32 + 0.5) / n_t as f32 * tau;
                         let to_exit = if exit_bottom { tau - depth } else { depth };
-                        let ss = phase * (-depth / mu0).exp();
-                        let column = ColumnSample {
-                            tau_sun: depth / mu0,
-                            tau_above: depth,
-                            tau_below: tau - depth,
-                            mu0,
-                            mu_view: mu_down,
-                            cos_theta,
-                            tau_across: f32::INFINITY,
-                        };
-                        let model = PhaseModel::DualLobeHg {
-                            g_forward: g,
-                            g_backward: 0.0,
-                            forward_weight: 1.0,
-                        };
-                        let beam = beam_light(&model, cos_theta, column.tau_sun, albedo);
-                        let ms = delta_eddington_source(&column, albedo, g, g * g, beam);
-                        let j = albedo * (ss + ms) * (-to_exit / mu).exp() / mu;
+                        let j = slab_source(tau, depth, mu0, mu_down, cos_theta, albedo, g)
+                            * (-to_exit / mu).exp()
+                            / mu;
                         radiance += (j * tau / n_t as f32) as f64;
                     }
                     let d_omega = (1.0 / n_mu as f64) * (2.0 * std::f64::consts::PI / n_phi as f64);
@@ -557,6 +540,39 @@ mod tests {
             }
         }
         out / mu0 as f64 + (-(tau / mu0) as f64).exp()
+    }
+
+    /// The source the march integrates at optical depth `depth` below the top of a homogeneous
+    /// HG slab of optical thickness `tau`, per unit sun irradiance: single scattering plus the
+    /// model's (the beam light included), times the albedo.
+    fn slab_source(
+        tau: f32,
+        depth: f32,
+        mu0: f32,
+        mu_view: f32,
+        cos_theta: f32,
+        albedo: f32,
+        g: f32,
+    ) -> f32 {
+        use crate::lighting::phase::henyey_greenstein;
+        let model = PhaseModel::DualLobeHg {
+            g_forward: g,
+            g_backward: 0.0,
+            forward_weight: 1.0,
+        };
+        let column = ColumnSample {
+            tau_sun: depth / mu0,
+            tau_above: depth,
+            tau_below: tau - depth,
+            mu0,
+            mu_view,
+            cos_theta,
+            tau_across: f32::INFINITY,
+        };
+        let beam = beam_light(&model, cos_theta, column.tau_sun, albedo);
+        let ss = henyey_greenstein(cos_theta, g) * (-depth / mu0).exp();
+        let ms = delta_eddington_source(&column, albedo, g, model.second_moment(), beam);
+        albedo * (ss + ms)
     }
 
     #[test]
@@ -586,12 +602,6 @@ mod tests {
     /// `view` (y up), as the march integrates it: single scattering and the model's source,
     /// per unit optical depth, attenuated to the bottom; sun illuminance 10 toward `sun`.
     fn marched_radiance_below(tau: f32, sun: [f32; 3], view: [f32; 3], albedo: f32, g: f32) -> f64 {
-        use crate::lighting::phase::henyey_greenstein;
-        let model = PhaseModel::DualLobeHg {
-            g_forward: g,
-            g_backward: 0.0,
-            forward_weight: 1.0,
-        };
         // The light the camera sees travels along -view; cos θ against the sun's light (-sun).
         let cos_theta = sun[0] * view[0] + sun[1] * view[1] + sun[2] * view[2];
         let (mu0, mu) = (sun[1], view[1]);
@@ -599,19 +609,10 @@ mod tests {
         let mut radiance = 0.0f64;
         for k in 0..n {
             let depth = (k as f32 + 0.5) / n as f32 * tau;
-            let column = ColumnSample {
-                tau_sun: depth / mu0,
-                tau_above: depth,
-                tau_below: tau - depth,
-                mu0,
-                mu_view: mu,
-                cos_theta,
-                tau_across: f32::INFINITY,
-            };
-            let beam = beam_light(&model, cos_theta, column.tau_sun, albedo);
-            let ss = henyey_greenstein(cos_theta, g) * (-depth / mu0).exp();
-            let ms = delta_eddington_source(&column, albedo, g, model.second_moment(), beam);
-            let j = 10.0 * albedo * (ss + ms) * (-(tau - depth) / mu).exp() / mu;
+            let j = 10.0
+                * slab_source(tau, depth, mu0, mu, cos_theta, albedo, g)
+                * (-(tau - depth) / mu).exp()
+                / mu;
             radiance += (j * tau / n as f32) as f64;
         }
         radiance
