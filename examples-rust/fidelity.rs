@@ -18,7 +18,7 @@
 //! [--noise-spp N] [--closeup-spp N] [--only slab|sphere|noise]
 //! [--view sparse_ground|overcast_ground|sparse_above|sparse_closeup]
 //! [--quality LEVEL] [--pictures DIR] [--bands]
-//! [--dump DIR] [--by-transmittance] [--single] [--fresh]` (software
+//! [--dump DIR] [--by-transmittance] [--single] [--no-ambient] [--fresh]` (software
 //! Vulkan: minutes to an hour, by the sample counts). Path-traced images are cached under
 //! target/fidelity-cache, or the folder NIMBUS_FIDELITY_CACHE names (keyed by medium, view,
 //! sample count and the path tracer's and medium's shader sources); `--fresh` traces anew. `--bands` prints the march's and the
@@ -26,7 +26,7 @@
 //! float images (march, path traced, and its two halves) for analysis; `--by-transmittance`
 //! compares the means in bands of the reference's transmittance; `--single` compares single
 //! scattering alone (the march's `SingleOnly` model and the path tracer's first order, ambient
-//! off on both sides).
+//! off on both sides); `--no-ambient` all orders with the ambient off on both sides.
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -130,6 +130,10 @@ fn both(settings: &Settings, f: &FrameInputs, size: (u32, u32), spp: u32) -> Res
     settings.march.resolution = TraceResolution::Full;
     if single {
         settings.lighting.multiple_scattering.model = MultipleScatteringModel::SingleOnly;
+    }
+    // `--no-ambient`: all orders of the sun's light alone, which tells the sun's part of an
+    // error from the sky's.
+    if single || std::env::args().any(|a| a == "--no-ambient") {
         settings.weather.ambient_top = Vec3::ZERO;
         settings.weather.ambient_bottom = Vec3::ZERO;
     }
@@ -604,6 +608,9 @@ fn main() -> Result<(), String> {
     }
     if write && single_only() {
         return Err("--write documents all orders: drop --single".into());
+    }
+    if write && args.iter().any(|a| a == "--no-ambient") {
+        return Err("--write documents the presets' lighting: drop --no-ambient".into());
     }
 
     // Slabs.
