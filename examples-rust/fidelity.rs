@@ -833,9 +833,12 @@ fn main() -> Result<(), String> {
              model) that is the vertical: its top is the light march's optical depth projected on\n\
              it, its bottom the optical depth below the sample, the slab's own geometry. In the\n\
              debug sphere it is the radius: both ends on the surface, lit from the end that faces\n\
-             the sun (the two ends share the light near the terminator), and the column's sides\n\
-             leak diffuse light (diffusion theory's transverse buckling, matched at the sunlit face\n\
-             to the broad medium's field). The light the delta scaling keeps in the beam\n\
+             the sun (the two ends share the light near the terminator). The column's sides leak\n\
+             diffuse light (diffusion theory's transverse buckling, matched at the sunlit face to\n\
+             the broad medium's field and never above it): the sphere's column has the sphere's\n\
+             radius, a noise cloud's one that grows with the coverage (1 km for sparse cumulus)\n\
+             and the extinction of the cloud's body, the debug slab none. The light the delta\n\
+             scaling keeps in the beam\n\
              (`beam_light`) is seen through the phase spread once per forward scattering: its\n\
              narrow part, the phase's diffraction lobe (HG 0.988, weight 0.518 at 10 µm), by that\n\
              lobe (HG lobes compose exactly); the rest of the delta-Eddington peak (f = g² = 0.747),\n\
@@ -1045,7 +1048,36 @@ fn main() -> Result<(), String> {
              (`broad_phase`, n = 1 or 2) in its place, nor a mix of the two, fits both the 95-100°\n\
              views and the 130° one (130° stays at 0.63 of it with any mix): the light seen there is\n\
              likely light the forward peak carried and the broad lobe then scattered back, which the\n\
-             lobe around the sun cannot hold.\n",
+             lobe around the sun cannot hold.\n\
+             Noise clouds' columns leak (2026-12-05, seventh session). They were layers, infinitely\n\
+             wide, and the diffuse light a bounded cloud loses through its sides stayed in. By\n\
+             fifths of the reference's luminance over the cloud pixels (sorted on one half of the\n\
+             path-traced samples and compared with the other, so the reference's noise does not\n\
+             sort itself), sparse cumulus from the ground came out 1.55 / 1.21 / 1.05 / 0.86 / 0.81\n\
+             of the path tracer, the same with the ambient off on both sides (`--no-ambient`: the\n\
+             sun's light, not the sky's), and up close 1.30 / 1.00 / 0.86 / 0.82 / 0.66: bases too\n\
+             bright, lit parts too dark. A noise cloud is now a column of radius 1.5 km times\n\
+             c / (1 - c) at coverage c (`NOISE_CLOUD_RADIUS`: 1 km for the sparse preset's 0.4, as\n\
+             wide as fair-weather cumulus are deep; c / (1 - c) is the ratio of the mean chords\n\
+             through cloud and clear air in a random two-phase medium, and keeps the stormy deck,\n\
+             coverage 0.9, from going charcoal through sides it does not have), whose optical\n\
+             radius is the cloud body's, half the layer's peak extinction\n\
+             (`NOISE_CLOUD_BODY_DENSITY`; with the sample's own extinction the light followed\n\
+             every change of the local density: the shadow map's light went from FLIP 0.052 to\n\
+             0.073 against the full light march, and a weather map held by a cancel moved 2.8% of\n\
+             the pixels instead of 1.7%). The sphere's leak, which the noise clouds now share, is capped\n\
+             at the broad medium's field: matched at the sunlit face, a thin column's leaky field\n\
+             rose faster with depth than the broad one and came out brighter (1.7 times at the\n\
+             bottom of a τ = 2 column of optical radius 3; without the cap a 1 km column made\n\
+             sparse cumulus from the ground 1.33 times the path tracer, 300 m 4.2 times). Fifths\n\
+             from the ground 1.38 / 1.13 / 1.03 / 0.86 / 0.81, up close 1.12 / 0.97 / 0.86 / 0.81 /\n\
+             0.66. FLIP: from the ground 0.118 -> 0.112 (ratio 0.951 -> 0.931), from above 0.124\n\
+             -> 0.122 (0.996 -> 0.955), up close 0.115 -> 0.105 (0.797 -> 0.782), overcast\n\
+             (coverage 0.97, a 48 km column) as before. The cap moved the side-lit sphere from\n\
+             0.746 to 0.726 (contrast 0.693 -> 0.663), the back-lit one not at all; the slabs are\n\
+             layers and do not change. What still misses up close is the brightest fifth, the\n\
+             cumulus' sunlit sides (0.66), where a vertical column lit at the sun's elevation\n\
+             stands for light that enters through a wall.\n",
         );
         md.push_str("\n## Pictures\n\n");
         let mut names: Vec<String> = std::fs::read_dir(&dir)

@@ -10,6 +10,29 @@ const DE_MIN_MU0: f32 = 0.3;
 // whole column toward a camera above (DIFFUSE_CROSSING in src/lighting/diffusion.rs).
 const DE_DIFFUSE_CROSSING: f32 = 0.5;
 
+// The radius (m) of the column a noise-model cloud is taken as at coverage 1/2, whose sides
+// leak diffuse light; at coverage c it is c / (1 - c) times this (NOISE_CLOUD_RADIUS in
+// src/lighting/diffusion.rs says why).
+const NOISE_CLOUD_RADIUS: f32 = 1500.0;
+
+// The extinction of a noise-model cloud's body, as a share of the layer's peak (its density
+// times its extinction): the column's optical radius is noise_cloud_radius times that
+// (NOISE_CLOUD_BODY_DENSITY in src/lighting/diffusion.rs says why).
+const NOISE_CLOUD_BODY_DENSITY: f32 = 0.5;
+
+// The radius (m) of a noise-model cloud's column at coverage `coverage`.
+fn noise_cloud_radius(coverage: f32) -> f32 {
+    let c = clamp(coverage, 0.0, 0.999);
+    return NOISE_CLOUD_RADIUS * c / (1.0 - c);
+}
+
+// The optical radius of a noise-model cloud's column for a layer of coverage `coverage` and
+// peak extinction `peak_sigma_t` (its density times its extinction): the body's, not the
+// sample's (noise_cloud_optical_radius in src/lighting/diffusion.rs).
+fn noise_cloud_optical_radius(coverage: f32, peak_sigma_t: f32) -> f32 {
+    return noise_cloud_radius(coverage) * NOISE_CLOUD_BODY_DENSITY * peak_sigma_t;
+}
+
 // j0,1, the first zero of J0: a cylinder of radius a has the transverse buckling j0,1 / a.
 const BESSEL_J0_FIRST_ZERO: f32 = 2.4048256;
 
@@ -20,16 +43,19 @@ const BESSEL_J0_FIRST_ZERO: f32 = 2.4048256;
 fn delta_eddington(a: f32, b: f32, mu0: f32, albedo: f32, g: f32, tau_across: f32) -> vec2f {
     let leaky = delta_eddington_moments(a, b, mu0, albedo, g, tau_across);
     if (tau_across >= 1e30) {
-        return leaky;
+        return leaky.xy;
     }
-    // Matched to the broad medium's field at the sunlit face (delta_eddington_column in
+    // Matched to the broad medium's field at the sunlit face, and never above the broad
+    // medium's field at the sample: a leak only takes light away (delta_eddington_column in
     // src/lighting/diffusion.rs says why).
-    let face_leaky = delta_eddington_moments(0.0, a + b, mu0, albedo, g, tau_across).x;
-    let face_broad = delta_eddington_moments(0.0, a + b, mu0, albedo, g, 1e30).x;
-    return leaky * select(1.0, face_broad / face_leaky, face_leaky > 0.0);
+    let broad = delta_eddington_moments(a, b, mu0, albedo, g, 1e30);
+    let matched = leaky.xy * (broad.z / leaky.z);
+    let capped = matched * min(broad.x / matched.x, 1.0);
+    return select(capped, broad.xy, leaky.z <= 0.0 || leaky.x <= 0.0);
 }
 
-fn delta_eddington_moments(a: f32, b: f32, mu0: f32, albedo: f32, g: f32, tau_across: f32) -> vec2f {
+// (I0, I1) at the sample and I0 at the sunlit face (a = 0) of the same column.
+fn delta_eddington_moments(a: f32, b: f32, mu0: f32, albedo: f32, g: f32, tau_across: f32) -> vec3f {
     // The forward peak folded into the beam: f = g² for a forward phase, none for a backward one.
     let f = max(g, 0.0) * max(g, 0.0);
     let w = clamp(albedo, 0.0, DE_MAX_ALBEDO);
@@ -65,7 +91,7 @@ fn delta_eddington_moments(a: f32, b: f32, mu0: f32, albedo: f32, g: f32, tau_ac
     let ea = exp(-k * ta);
     let eb = exp(-k * (tt - ta));
     let ed = exp(-ta / m0);
-    return vec2f(c1 * ea + c2 * eb + alpha * ed, p * (c1 * ea - c2 * eb) + beta * ed);
+    return vec3f(c1 * ea + c2 * eb + alpha * ed, p * (c1 * ea - c2 * eb) + beta * ed, c1 + c2 * e_k + alpha);
 }
 
 // The light the delta scaling keeps in the beam, scattered toward the camera (per unit sun

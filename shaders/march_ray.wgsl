@@ -172,8 +172,9 @@ fn sphere_exit(p: vec3f, d: vec3f) -> f32 {
 //   mu0 above (the light march's optical depth projected: the slab's exact top), its bottom the
 //   column below (column_below). A sun near or below the local
 //   horizon still lights a bounded cloud through its sides: the column is lit at no less than
-//   DE_MIN_MU0. Layers are taken as infinitely wide (a noise cloud's own width is not known to
-//   the march).
+//   DE_MIN_MU0. The debug slab is infinitely wide; a noise cloud's own width is not known to
+//   the march, and its column has the radius noise_cloud_radius gives the layer's coverage,
+//   whose sides leak, and the extinction of the cloud's body (NOISE_CLOUD_BODY_DENSITY).
 // - In the debug sphere it is the radius, with both ends on the surface (exact). The sun lights
 //   it from the end that faces it; within DE_MIN_MU0 of the terminator the two ends share the
 //   light, so the terminator has no seam (the system is linear in the incident flux). The lit
@@ -237,7 +238,10 @@ fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, sigma_t: f32, tau_view: f32,
     // farther than the ray's own optical depth (for a slab, never closer than the column: no
     // change).
     below = mix(below, min(below, tau_view), smoothstep(0.0, 0.5, cos_theta));
-    let light = delta_eddington_source(tau_sun * mu0, below, mu0, mu_view, cos_theta, albedo, g, chi2, beam, 1e30);
+    // The column's optical radius is the cloud body's, not the sample's: a wisp at a cloud's
+    // edge sits in a body as dense as the rest (NOISE_CLOUD_BODY_DENSITY says why).
+    let across = select(noise_cloud_optical_radius(u.shape.x, u.shape.y * u.shape.z), 1e30, debug_mode() == DEBUG_SLAB);
+    let light = delta_eddington_source(tau_sun * mu0, below, mu0, mu_view, cos_theta, albedo, g, chi2, beam, across);
     return vec2f(light, ambient_share);
 }
 

@@ -54,6 +54,55 @@ pub const MAX_ALBEDO: f32 = 1.0 - 1e-6;
 /// lost 17% of the light in all (the_march_of_the_model_sends_out_no_more_than_comes_in).
 pub(crate) const DIFFUSE_CROSSING: f32 = 0.5;
 
+/// The radius (m) of the column a noise-model cloud is taken as at coverage 1/2; at coverage c
+/// it is c / (1 - c) times this (`noise_cloud_radius` in shaders/diffusion.wgsl):
+/// [`delta_eddington_column`]'s `tau_across` is [`noise_cloud_optical_radius`], and the debug
+/// slab stays a layer. Until 2026-12-05 noise clouds were layers, infinitely wide: the diffuse
+/// light that leaves a bounded cloud through its sides stayed in, and from the ground the
+/// cumulus' bases came out too bright and their lit parts too dark. By fifths of the
+/// reference's luminance over the cloud pixels of sparse cumulus from the ground (sorted on
+/// one half of the path-traced samples, compared with the other), the march was 1.55 / 1.21 /
+/// 1.05 / 0.86 / 0.81 of the path tracer, the same with the ambient off (the sun's light, not
+/// the sky's); with the leak 1.38 / 1.13 / 1.03 / 0.86 / 0.81. Fair-weather cumulus are about
+/// as wide as they are deep, about a kilometre. The c / (1 - c) is the ratio of the mean chord
+/// through cloud to the mean chord through clear air in a two-phase random medium of cloud
+/// fraction c: as the coverage closes, clouds widen into a deck. With a fixed 1 km the stormy
+/// deck (coverage 0.9) went charcoal from below, its light leaking through sides it does not
+/// have. With the sample's own extinction in place of the body's, 500 m and 2 km scored within
+/// 0.003 FLIP of 1 km on every sparse view; a horizontal density probe instead of a fixed
+/// radius scored the same from the ground for another density call per sample.
+pub(crate) const NOISE_CLOUD_RADIUS: f32 = 1_500.0;
+
+/// The extinction of a noise-model cloud's body, as a share of the layer's peak (its density
+/// times its extinction, the path tracer's majorant): the column's optical radius is the
+/// body's, not the sample's (`NOISE_CLOUD_BODY_DENSITY` in shaders/diffusion.wgsl). A wisp at a
+/// cloud's edge sits in a body as dense as the rest, and the light that reaches it has crossed
+/// that body. Taken from the sample itself, the leak made the light follow every change of the
+/// local density: the shadow map's light moved from FLIP 0.052 to 0.073 against the full
+/// light march on the noise model (tests/shadows.rs), and the 8-bit weather map held by a
+/// cancel moved 2.8% of the pixels by more than 0.02 (1.7% with the body's; tests/weather.rs).
+/// Against the 2048-sample references (FLIP) from the ground, from 12 km above and up close,
+/// before the leak 0.118 / 0.124 / 0.115; the sample's extinction 0.110 / 0.119 / 0.103; the
+/// body at 1/4 of the peak 0.111 / 0.121 / 0.103, at 1/2 0.112 / 0.122 / 0.105, at the peak
+/// 0.115 / 0.123 / 0.110.
+pub(crate) const NOISE_CLOUD_BODY_DENSITY: f32 = 0.5;
+
+/// The radius (m) of a noise-model cloud's column at the layer's coverage `coverage`
+/// ([`NOISE_CLOUD_RADIUS`] × c / (1 - c), c clamped to [0, 0.999]; mirrored by
+/// `noise_cloud_radius` in shaders/diffusion.wgsl).
+pub fn noise_cloud_radius(coverage: f32) -> f32 {
+    let c = coverage.clamp(0.0, 0.999);
+    NOISE_CLOUD_RADIUS * c / (1.0 - c)
+}
+
+/// The optical radius of a noise-model cloud's column (the march's `tau_across`) for a layer of
+/// coverage `coverage` and peak extinction `peak_sigma_t` (1/m: its density times its
+/// extinction): [`noise_cloud_radius`] times the body's extinction,
+/// [`NOISE_CLOUD_BODY_DENSITY`] of the peak.
+pub fn noise_cloud_optical_radius(coverage: f32, peak_sigma_t: f32) -> f32 {
+    noise_cloud_radius(coverage) * NOISE_CLOUD_BODY_DENSITY * peak_sigma_t
+}
+
 /// j₀,₁, the first zero of the Bessel function J₀: the transverse buckling of a cylinder of
 /// radius a is j₀,₁ / a.
 pub(crate) const BESSEL_J0_FIRST_ZERO: f32 = 2.404_825_6;
@@ -76,6 +125,17 @@ pub fn delta_eddington(a: f32, b: f32, mu0: f32, albedo: f32, g: f32) -> (f32, f
 /// sphere's disc came out 0.42 of the path tracer (its lit face half as bright as a broad
 /// face), with no leak at all 1.44 and peaked in the middle (the light that leaves through the
 /// sides piles up in the column).
+///
+/// A leak only takes light away: where the matched solution is brighter than the broad
+/// medium's at the sample, the broad one stands (both moments). Matched at the face, a thin
+/// column's leaky field rises faster with depth than the broad one (its face, lit mostly by
+/// light scattered back from below, loses more to the leak than its inside), and came out
+/// brighter than the broad medium's: 1.7 times at the bottom of a τ = 2 column of optical
+/// radius 3 (the_leak_only_takes_light_away). Narrower than about one optical radius the leaky
+/// face goes negative (the diffusion mode no longer holds) and the broad field stands too. On the side-lit sphere the cap moved the disc
+/// from 0.746 to 0.778 of the path tracer (limb contrast 0.693 -> 0.710), back-lit unchanged
+/// (0.843, contrast 1.006); scaling the matched moments down to the broad I0 instead (keeping
+/// the leak's flux) gave 0.726 side-lit and darkened sparse cumulus from above (0.994 -> 0.923).
 pub fn delta_eddington_column(
     a: f32,
     b: f32,
@@ -84,21 +144,24 @@ pub fn delta_eddington_column(
     g: f32,
     tau_across: f32,
 ) -> (f32, f32) {
-    let leaky = delta_eddington_moments(a, b, mu0, albedo, g, tau_across);
+    let (i0, i1, face) = delta_eddington_moments(a, b, mu0, albedo, g, tau_across);
     if tau_across.is_infinite() {
-        return leaky;
+        return (i0, i1);
     }
-    let face_leaky = delta_eddington_moments(0.0, a + b, mu0, albedo, g, tau_across).0;
-    let face_broad = delta_eddington_moments(0.0, a + b, mu0, albedo, g, f32::INFINITY).0;
-    let m = if face_leaky > 0.0 {
-        face_broad / face_leaky
-    } else {
-        1.0
-    };
-    (leaky.0 * m, leaky.1 * m)
+    let (broad0, broad1, face_broad) = delta_eddington_moments(a, b, mu0, albedo, g, f32::INFINITY);
+    // Across less than about an optical radius the leaky solution's face goes negative: the
+    // diffusion mode no longer describes the column, and the broad field stands.
+    if face <= 0.0 || i0 <= 0.0 {
+        return (broad0, broad1);
+    }
+    // Scaled down to the broad I0 where it would exceed it (both moments by one factor, so
+    // that the field stays continuous across the cap).
+    let m = face_broad / face * (broad0 / (i0 * face_broad / face)).min(1.0);
+    (i0 * m, i1 * m)
 }
 
-/// The closed form of the module's system in one column (the leak included).
+/// The closed form of the module's system in one column (the leak included): (I0, I1) at the
+/// sample and I0 at the sunlit face (a = 0) of the same column.
 fn delta_eddington_moments(
     a: f32,
     b: f32,
@@ -106,7 +169,7 @@ fn delta_eddington_moments(
     albedo: f32,
     g: f32,
     tau_across: f32,
-) -> (f32, f32) {
+) -> (f32, f32, f32) {
     // The forward peak folded into the beam: f = g² for a forward phase (then g' = g / (1 + g)),
     // none for a backward one (g' = g).
     let f = g.max(0.0) * g.max(0.0);
@@ -145,7 +208,7 @@ fn delta_eddington_moments(
     let (ea, eb, ed) = ((-k * ta).exp(), (-k * (tt - ta)).exp(), (-ta / m0).exp());
     let i0 = c1 * ea + c2 * eb + alpha * ed;
     let i1 = p * (c1 * ea - c2 * eb) + beta * ed;
-    (i0, i1)
+    (i0, i1, c1 + c2 * e_k + alpha)
 }
 
 /// Where a march sample sits in its column, and how it is lit and seen.
@@ -444,6 +507,74 @@ mod tests {
         let wide = delta_eddington_column(20.0, 20.0, mu0, 0.999, g, 1e7).0;
         let layer = delta_eddington(20.0, 20.0, mu0, 0.999, g).0;
         assert!((wide - layer).abs() / layer < 1e-3, "{wide} vs {layer}");
+    }
+
+    #[test]
+    fn noise_clouds_widen_into_a_deck_as_the_coverage_closes() {
+        // Sparse cumulus (the preset's coverage 0.4) are about a kilometre across; a closed
+        // deck is a layer for the leak (its radius hundreds of optical depths at the thinnest).
+        assert!((noise_cloud_radius(0.4) - 1_000.0).abs() < 1.0);
+        assert_eq!(noise_cloud_radius(0.0), 0.0);
+        assert!(noise_cloud_radius(1.0) > 1e6);
+        assert!(noise_cloud_radius(0.9) > 10.0 * noise_cloud_radius(0.4));
+        // The sparse preset's body (density 1, the default extinction 0.04/m) is
+        // tens of optical depths across: a thick column, not a wisp.
+        let across = noise_cloud_optical_radius(0.4, 0.04);
+        assert!((across - 20.0).abs() < 1e-3, "{across}");
+        // The shader's copies of the constants are these.
+        let wgsl = include_str!("../../shaders/diffusion.wgsl");
+        for (name, value) in [
+            ("NOISE_CLOUD_RADIUS", NOISE_CLOUD_RADIUS),
+            ("NOISE_CLOUD_BODY_DENSITY", NOISE_CLOUD_BODY_DENSITY),
+        ] {
+            assert!(
+                wgsl.contains(&format!("const {name}: f32 = {value:?};")),
+                "shaders/diffusion.wgsl's {name} differs from {value}"
+            );
+        }
+    }
+
+    #[test]
+    fn the_leak_only_takes_light_away() {
+        let (g, albedo) = (0.8f32, 0.99f32);
+        // The face match alone: at the bottom of a thin column (τ = 2, optical radius 3) the
+        // leaky field, scaled to the broad one at the face, comes out brighter than the broad
+        // medium's (its face loses more to the leak than its inside), which the cap removes.
+        let (tau, across, mu0) = (2.0f32, 3.0f32, 0.82f32);
+        let (leak_bottom, _, leak_face) = delta_eddington_moments(tau, 0.0, mu0, albedo, g, across);
+        let (broad_bottom, _, broad_face) =
+            delta_eddington_moments(tau, 0.0, mu0, albedo, g, f32::INFINITY);
+        let matched = leak_bottom * broad_face / leak_face;
+        assert!(
+            matched > 1.5 * broad_bottom,
+            "uncapped {matched} vs broad {broad_bottom}"
+        );
+        let capped = delta_eddington_column(tau, 0.0, mu0, albedo, g, across).0;
+        let broad = delta_eddington(tau, 0.0, mu0, albedo, g).0;
+        assert!(
+            (capped - broad).abs() <= 1e-6 * broad,
+            "capped {capped} vs broad {broad}"
+        );
+        // Everywhere, thin and thick, low and high sun: never above the broad medium's field,
+        // and in a thick narrow column far below it (the light left through the sides).
+        for tau in [0.5f32, 2.0, 10.0, 40.0] {
+            for across in [1.0f32, 3.0, 10.0, 30.0] {
+                for mu0 in [0.3f32, 0.6, 1.0] {
+                    for x in [0.0f32, 0.3, 0.7, 1.0] {
+                        let (a, b) = (x * tau, (1.0 - x) * tau);
+                        let narrow = delta_eddington_column(a, b, mu0, albedo, g, across).0;
+                        let broad = delta_eddington(a, b, mu0, albedo, g).0;
+                        assert!(
+                            narrow <= broad * (1.0 + 1e-6) && narrow >= 0.0,
+                            "τ {tau}, radius {across}, μ0 {mu0}, at {x}: {narrow} vs {broad}"
+                        );
+                    }
+                }
+            }
+        }
+        let deep = delta_eddington_column(30.0, 10.0, 0.6, albedo, g, 3.0).0;
+        let broad = delta_eddington(30.0, 10.0, 0.6, albedo, g).0;
+        assert!(deep < 0.2 * broad, "{deep} vs {broad}");
     }
 
     #[test]
