@@ -12,6 +12,8 @@
 //!        cargo run --release --example bench -- --start-only               (the start section)
 //!        cargo run --release --example bench -- [--quick] --profile-only   (the frame's breakdown)
 //!        cargo run --release --example bench -- [--quick] --weather-only   (a weather request)
+//!        cargo run --release --example bench -- [--quick] --model-cost     (the light model's cost,
+//!        delta-Eddington against the octaves in alternating rounds)
 //!        --size WxH sets the size of the profile, scene matrix, weather request and flight
 //!        (default 1280x720, quick 320x180; a real GPU is measured at 1920x1080)
 
@@ -24,6 +26,8 @@ use nimbus::glam::Vec3;
 use nimbus::settings::{MultipleScatteringModel, Quality, Temporal, TraceResolution};
 use nimbus::{Headless, Settings, Weather};
 
+#[path = "bench_model_cost.rs"]
+mod bench_model_cost;
 #[path = "bench_profile.rs"]
 mod bench_profile;
 #[path = "bench_start.rs"]
@@ -597,6 +601,7 @@ enum Mode {
     Start,
     Weather,
     Views,
+    ModelCost,
 }
 
 /// `WxH` as a size, both sides at least 16.
@@ -626,6 +631,7 @@ fn run() -> Result<(), String> {
             "--start-only" => mode = Mode::Start,
             "--weather-only" => mode = Mode::Weather,
             "--views-only" => mode = Mode::Views,
+            "--model-cost" => mode = Mode::ModelCost,
             "--out" => out = PathBuf::from(args.next().ok_or("--out needs a folder")?),
             "--from-csv" => {
                 // Re-draw the chart and the tables from an earlier run's CSV.
@@ -645,7 +651,7 @@ fn run() -> Result<(), String> {
             }
             _ => {
                 return Err(format!(
-                "unexpected argument {a:?}; usage: bench [--quick] [--size WxH] [--out DIR] [--views-only | --start-only | --profile-only | --weather-only] | --from-csv FILE"
+                "unexpected argument {a:?}; usage: bench [--quick] [--size WxH] [--out DIR] [--views-only | --start-only | --profile-only | --weather-only | --model-cost] | --from-csv FILE"
             ))
             }
         }
@@ -670,6 +676,10 @@ fn run() -> Result<(), String> {
         }
         Mode::Views => {
             bench_views::views_section(quick)?;
+            return Ok(());
+        }
+        Mode::ModelCost => {
+            bench_model_cost::model_cost_section(size)?;
             return Ok(());
         }
     }
