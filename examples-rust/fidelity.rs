@@ -1077,7 +1077,24 @@ fn main() -> Result<(), String> {
              0.746 to 0.726 (contrast 0.693 -> 0.663), the back-lit one not at all; the slabs are\n\
              layers and do not change. What still misses up close is the brightest fifth, the\n\
              cumulus' sunlit sides (0.66), where a vertical column lit at the sun's elevation\n\
-             stands for light that enters through a wall.\n",
+             stands for light that enters through a wall.\n\
+             Where the noise views' remaining error lies (same fifths, with the references'\n\
+             transmittance): the dimmest fifth is mostly cloud edges and wisps (transmittance\n\
+             0.53 from the ground, 0.31 up close, 0.43 from above), 1.12 to 1.38 times the path\n\
+             tracer in all three sparse views; over opaque pixels alone (transmittance below\n\
+             0.05) from the ground 1.14 / 1.06 / 0.94 / 0.82 / 0.78, up close 1.25 / 0.87 / 0.85\n\
+             / 0.80 / 0.65, from above flat (0.91 to 0.96). Single scattering is not it (`--single`,\n\
+             256 samples, from the ground: ratio 1.008, FLIP 0.047 against a floor of 0.034, every\n\
+             fifth within 0.98 to 1.06 but the darkest), nor the march's optical depth: the default\n\
+             level's transmittance is slightly higher than the reference's (0.548 against 0.534 in\n\
+             the dimmest fifth from the ground), Ultra's matches it to 0.003, and Ultra's fifths have\n\
+             the same shape. It is the diffuse field of the columns, too bright in wisps and too flat\n\
+             across opaque cumulus seen from below. Two tries with a second column toward the sun\n\
+             for the walls (its larger flux, the μ0 of a wall facing the sun) made every view\n\
+             brighter without changing that shape: taken where it is brighter, 1.25 / 1.44 / 1.37\n\
+             times the path tracer from the ground / above / up close; weighted by a density probe\n\
+             above (light from a wall where the light march's depth is short of the column above),\n\
+             FLIP 0.125 / 0.184 / 0.129.\n",
         );
         md.push_str("\n## Pictures\n\n");
         let mut names: Vec<String> = std::fs::read_dir(&dir)
