@@ -49,8 +49,7 @@ fn delta_eddington(a: f32, b: f32, mu0: f32, albedo: f32, g: f32, tau_across: f3
     // medium's field at the sample: a leak only takes light away (delta_eddington_column in
     // src/lighting/diffusion.rs says why).
     let broad = delta_eddington_moments(a, b, mu0, albedo, g, 1e30);
-    let matched = leaky.xy * (broad.z / leaky.z);
-    let capped = matched * min(broad.x / matched.x, 1.0);
+    let capped = leaky.xy * min(broad.z / leaky.z, broad.x / leaky.x);
     return select(capped, broad.xy, leaky.z <= 0.0 || leaky.x <= 0.0);
 }
 

@@ -127,15 +127,16 @@ pub fn delta_eddington(a: f32, b: f32, mu0: f32, albedo: f32, g: f32) -> (f32, f
 /// sides piles up in the column).
 ///
 /// A leak only takes light away: where the matched solution is brighter than the broad
-/// medium's at the sample, the broad one stands (both moments). Matched at the face, a thin
+/// medium's at the sample, both its moments are scaled down by one factor to the broad I0, so
+/// that the field stays continuous across the cap. Matched at the face, a thin
 /// column's leaky field rises faster with depth than the broad one (its face, lit mostly by
 /// light scattered back from below, loses more to the leak than its inside), and came out
 /// brighter than the broad medium's: 1.7 times at the bottom of a τ = 2 column of optical
 /// radius 3 (the_leak_only_takes_light_away). Narrower than about one optical radius the leaky
-/// face goes negative (the diffusion mode no longer holds) and the broad field stands too. On the side-lit sphere the cap moved the disc
-/// from 0.746 to 0.778 of the path tracer (limb contrast 0.693 -> 0.710), back-lit unchanged
-/// (0.843, contrast 1.006); scaling the matched moments down to the broad I0 instead (keeping
-/// the leak's flux) gave 0.726 side-lit and darkened sparse cumulus from above (0.994 -> 0.923).
+/// face goes negative (the diffusion mode no longer holds) and the broad field stands. On the
+/// side-lit sphere the cap moved the disc from 0.746 to 0.726 of the path tracer (limb
+/// contrast 0.693 -> 0.663), back-lit unchanged (0.843, contrast 1.006); taking the broad
+/// medium's two moments where it caps instead gave 0.778 side-lit but jumped in I1 at the cap.
 pub fn delta_eddington_column(
     a: f32,
     b: f32,
@@ -154,9 +155,9 @@ pub fn delta_eddington_column(
     if face <= 0.0 || i0 <= 0.0 {
         return (broad0, broad1);
     }
-    // Scaled down to the broad I0 where it would exceed it (both moments by one factor, so
-    // that the field stays continuous across the cap).
-    let m = face_broad / face * (broad0 / (i0 * face_broad / face)).min(1.0);
+    // Matched to the broad field at the face, and scaled down to the broad I0 where it would
+    // exceed it (both moments by one factor, so that the field stays continuous across the cap).
+    let m = (face_broad / face).min(broad0 / i0);
     (i0 * m, i1 * m)
 }
 
