@@ -1295,3 +1295,65 @@ fn main() -> Result<(), String> {
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(scene: &str, ratio: f64, views: Vec<f64>) -> Row {
+        Row {
+            scene: scene.into(),
+            ratio,
+            octaves: 0.0,
+            noise: 0.0,
+            flip: None,
+            flip_floor: None,
+            contrast: None,
+            views,
+        }
+    }
+
+    #[test]
+    fn the_targets_list_names_every_miss_and_only_the_misses() {
+        let slab = "slab τ = 1, HG 0.8, sun 30° (views 90° / ...: 1.000 / ...)";
+        let mut sphere = row("sphere, sun side (over the disc)", 0.79, Vec::new());
+        sphere.contrast = Some((4.0, 4.5));
+        let mut sharp = row("Sparse from the ground (noise model)", 1.0, Vec::new());
+        sharp.flip = Some(0.1);
+        let mut soft = row("Overcast from the ground (noise model)", 1.0, Vec::new());
+        soft.flip = Some(0.1001);
+        let rows = [
+            row(slab, 1.0, vec![1.0, 1.25, 0.95, 1.0, 0.79]),
+            row(
+                "slab τ = 5, HG 0.8, sun 60° (views ...)",
+                1.11,
+                vec![1.11; 5],
+            ),
+            sphere,
+            sharp,
+            soft,
+        ];
+        let md = against_targets(&rows);
+        assert!(md.contains("Slab views within 20%: 8 of 10"), "{md}");
+        assert!(
+            md.contains("outside: slab τ = 1, HG 0.8, sun 30°, 55° away 1.250; slab τ = 1, HG 0.8, sun 30°, 20° toward 0.790)"),
+            "{md}"
+        );
+        assert!(
+            md.contains(
+                "Medians within 10%: 1 of 2; missed by slab τ = 5, HG 0.8, sun 60° (1.110)"
+            ),
+            "{md}"
+        );
+        assert!(
+            md.contains("disc 0.790 (missed), limb contrast 0.889 of the path tracer's (met)"),
+            "{md}"
+        );
+        assert!(
+            md.contains(
+                "FLIP ≤ 0.1: 1 of 2 (Sparse from the ground 0.100; Overcast from the ground 0.100)"
+            ),
+            "{md}"
+        );
+    }
+}
