@@ -56,21 +56,17 @@ fn sig(r: f64) -> String {
     }
 }
 
-/// The slab views (elevation, azimuth in degrees; the sun stands at azimuth 0): the zenith, then
-/// 55° and 20° above the horizon away from the sun (65-130° from it with the sun at 30° or 60°:
-/// the droplet phase's side minimum) and toward it (5-40°: its forward peak's flank). An odd
-/// count, so that the median is a view's.
-const SLAB_VIEWS: [(f32, f32); 5] = [
-    (90.0, 180.0),
-    (55.0, 180.0),
-    (20.0, 180.0),
-    (55.0, 0.0),
-    (20.0, 0.0),
+/// The slab views (elevation, azimuth in degrees, and the name the table gives each; the sun
+/// stands at azimuth 0): the zenith, then 55° and 20° above the horizon away from the sun
+/// (65-130° from it with the sun at 30° or 60°: the droplet phase's side minimum) and toward it
+/// (5-40°: its forward peak's flank). An odd count, so that the median is a view's.
+const SLAB_VIEWS: [(f32, f32, &str); 5] = [
+    (90.0, 180.0, "90°"),
+    (55.0, 180.0, "55° away"),
+    (20.0, 180.0, "20° away"),
+    (55.0, 0.0, "55° toward"),
+    (20.0, 0.0, "20° toward"),
 ];
-/// SLAB_VIEWS one by one, for the list of views that miss.
-const SLAB_VIEW_SHORT: [&str; 5] = ["90°", "55° away", "20° away", "55° toward", "20° toward"];
-/// How the table names SLAB_VIEWS, in order.
-const SLAB_VIEW_NAMES: &str = "90° / 55°, 20° away from the sun / 55°, 20° toward it";
 
 struct Row {
     scene: String,
@@ -490,7 +486,10 @@ fn compare(
 fn against_targets(rows: &[Row]) -> String {
     let off = |r: f64| (r - 1.0).abs();
     let slabs: Vec<&Row> = rows.iter().filter(|r| !r.views.is_empty()).collect();
-    let spheres: Vec<&Row> = rows.iter().filter(|r| r.contrast.is_some()).collect();
+    let spheres: Vec<(&Row, f64)> = rows
+        .iter()
+        .filter_map(|r| r.contrast.map(|(m, t)| (r, m / t)))
+        .collect();
     let noise: Vec<&Row> = rows
         .iter()
         .filter(|r| r.views.is_empty() && r.contrast.is_none())
@@ -510,9 +509,11 @@ fn against_targets(rows: &[Row]) -> String {
             .flat_map(|r| {
                 r.views
                     .iter()
-                    .zip(SLAB_VIEW_SHORT)
+                    .zip(SLAB_VIEWS)
                     .filter(|(v, _)| off(**v) > 0.2)
-                    .map(move |(v, name)| format!("{}, {name} {}", slab_label(&r.scene), sig(*v)))
+                    .map(move |(v, (_, _, name))| {
+                        format!("{}, {name} {}", slab_label(&r.scene), sig(*v))
+                    })
             })
             .collect();
         let medians_missed: Vec<String> = slabs
@@ -538,9 +539,7 @@ fn against_targets(rows: &[Row]) -> String {
             }
         );
     }
-    for r in &spheres {
-        let (m, t) = r.contrast.unwrap_or((1.0, 1.0));
-        let contrast = m / t;
+    for &(r, contrast) in &spheres {
         let verdict = |ok: bool| if ok { "met" } else { "missed" };
         let _ = writeln!(
             md,
@@ -751,7 +750,7 @@ fn main() -> Result<(), String> {
                 };
                 let s = debug_settings(slab, tau / 500.0, phase);
                 let mut ratios = Vec::new();
-                for (elevation, azimuth) in SLAB_VIEWS {
+                for (elevation, azimuth, _) in SLAB_VIEWS {
                     let eye = Vec3::new(0.0, 2.0, 0.0);
                     let target = eye + sun_at(elevation, azimuth) * 100.0;
                     let f = frame(eye, target, 20.0, sun_at(sun_elevation, 0.0), size);
@@ -769,7 +768,8 @@ fn main() -> Result<(), String> {
                     }
                 }
                 let scene = format!(
-                    "slab τ = {tau}, {phase_name}, sun {sun_elevation}° (views {SLAB_VIEW_NAMES}: {})",
+                    "slab τ = {tau}, {phase_name}, sun {sun_elevation}° (views {}: {})",
+                    SLAB_VIEWS.map(|(_, _, name)| name).join(" / "),
                     ratios
                         .iter()
                         .map(|r| sig(r.0))
