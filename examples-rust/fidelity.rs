@@ -1277,7 +1277,37 @@ fn main() -> Result<(), String> {
              to 0.15, where the probe finds clear air): FLIP 0.108 -> 0.106 from the ground, 0.109 ->\n\
              0.111 from above, up close unchanged; the diffuse crossing at 0.3 or 0.8 (overcast 0.112\n\
              -> 0.151 / 0.138); the body's density at 0.2 (no view better); a column along the sun in\n\
-             the debug sphere (side-lit disc 1.468, back-lit 0.284; half and half 1.101 / 0.539).\n",
+             the debug sphere (side-lit disc 1.468, back-lit 0.284; half and half 1.101 / 0.539).\n\n\
+             The thin lobe's shape (2026-12-06, tenth session). A thin column's diffuse light was\n\
+             spread around the sun by an HG lobe. Light scattered once out of the droplet phase's\n\
+             delta-Eddington remainder has the Draine lobe's shape, its deep side-scattering minimum\n\
+             (1 + α cos²θ, α = 22) and its rise toward the back, and keeps it seen through the\n\
+             diffraction lobe (weight 1 - w = 0.52), while the Draine lobe (w) spreads it by tens of\n\
+             degrees. The lobe now has that shape, (1 - w) Draine + w HG of the same asymmetry g g'\n\
+             (`PhaseModel::thin_lobe`), in the share of the light scattered only once, e^(-(1 - ωf) a)\n\
+             (a: the optical depth above the sample). Slab views within 20%: 72 -> 77 of 80; the\n\
+             droplet phase at τ = 1, sun 30°: 1.125 / 1.247 / 0.748 / 0.954 / 0.845 -> 1.078 / 0.988 /\n\
+             0.832 / 0.976 / 0.857, sun 60°: 0.973 / 1.231 / 1.324 / 0.967 / 0.768 -> 0.994 / 1.126 /\n\
+             1.037 / 0.972 / 0.788; τ = 5, sun 30°, 55° away 1.219 -> 1.172. The shape at every depth\n\
+             over-corrected (τ = 1, sun 30°, 55° away 0.660); (1 - w) of it at every depth darkened\n\
+             the overcast deck (FLIP 0.112 -> 0.131: its bases are seen some 85° from the sun, in the\n\
+             minimum, and their light has scattered many times). The noise views: from the ground\n\
+             FLIP 0.108 -> 0.110 (ratio 0.948 -> 0.923), overcast 0.112 -> 0.113, from above 0.109 ->\n\
+             0.106, up close 0.110 -> 0.116 (0.792 -> 0.788): lit from the side, it is seen near 90°\n\
+             from the sun, where the light carried sideways through a cloud, which the model lacks\n\
+             (the side-lit sphere's 0.73), and now the minimum both darken it. The spheres: 0.795 /\n\
+             0.731 (0.794 / 0.733). The model's cost against the octaves: 1.025 (1.026).\n\n\
+             Where the ground view's error is (tenth session). Its big cumulus: the base near the\n\
+             zenith (57° from the sun, optical depth 1.9 toward it) is 0.76 of the path tracer, the\n\
+             far part (90° from the sun, 5.4 toward it) 1.42. The path tracer's near base is 1.8\n\
+             times as bright as the far part; the march draws both alike. The light a few\n\
+             scatterings deep still has the phase's angular shape, which the P1 field (its\n\
+             anisotropy along the vertical, the same at 57° and 90° from the sun) does not: the\n\
+             slabs' problem, at the scale of one cloud. Tried, not kept: the P1 field's axis along\n\
+             the base shape's gradient near a cloud's boundary (its normal; FLIP 0.108 -> 0.106 /\n\
+             0.107 from the ground, the others within 0.002); the column's width from the view ray's\n\
+             depth where it entered through a side (0.108 -> 0.105 from the ground, overcast 0.112 ->\n\
+             0.117).\n",
         );
         md.push_str("\n## Pictures\n\n");
         let mut names: Vec<String> = std::fs::read_dir(&dir)

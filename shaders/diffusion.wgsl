@@ -150,19 +150,52 @@ fn broad_phase(model: u32, params: vec4f, cos_theta: f32, n: f32) -> f32 {
 // seen through the phase, I0 + g mu I1 in a thick column (mu: the light's direction toward the
 // camera against the downward vertical), the same energy in an HG lobe of asymmetry g g'
 // around the sun in a thin one, blended by 1 - e^{-c tau*'} (c = DE_DIFFUSE_CROSSING for a
-// camera below the sample, 1 for one above).
-fn delta_eddington_source(tau_above: f32, tau_below: f32, mu0: f32, mu_view: f32, cos_theta: f32, albedo: f32, g: f32, chi2: f32, beam: f32, tau_across: f32) -> f32 {
+// camera below the sample, 1 for one above). `lobe`: thin_lobe's shapes of that lobe toward the
+// camera (the HG lobe, the phase's once-scattered shape), mixed by once_scattered_share.
+fn delta_eddington_source(tau_above: f32, tau_below: f32, mu0: f32, mu_view: f32, lobe_shapes: vec2f, albedo: f32, g: f32, chi2: f32, beam: f32, tau_across: f32) -> f32 {
     let w = clamp(albedo, 0.0, DE_MAX_ALBEDO);
     let m0 = max(mu0, 1e-3);
     let a = tau_above;
     let i = delta_eddington(a, tau_below, m0, w, g, tau_across);
     let f = max(g, 0.0) * max(g, 0.0);
     let p1 = i.x + g * mu_view * i.y;
-    let ge = g * (g - f) / (1.0 - f);
-    let lobe = 4.0 * PI * i.x * henyey_greenstein(cos_theta, ge) * thin_column_limb(a + tau_below, w, f, mu_view, chi2);
+    let shape = mix(lobe_shapes.x, lobe_shapes.y, once_scattered_share(a, w, f));
+    let lobe = 4.0 * PI * i.x * shape * thin_column_limb(a + tau_below, w, f, mu_view, chi2);
     let crossing = mix(1.0, DE_DIFFUSE_CROSSING, smoothstep(-0.25, 0.25, mu_view));
     let thick = 1.0 - exp(-(a + tau_below) * (1.0 - w * f) * crossing);
     return max(beam + mix(lobe, p1, thick), 0.0);
+}
+
+// The asymmetry of the thin column's lobe around the sun, g g' (g' = (g - f) / (1 - f), the
+// phase's remainder after the delta scaling, f = g²).
+fn thin_lobe_asymmetry(g: f32) -> f32 {
+    let f = max(g, 0.0) * max(g, 0.0);
+    return g * (g - f) / (1.0 - f);
+}
+
+// The thin column's lobe toward the camera at cos_theta from the sun (PhaseModel::thin_lobe in
+// src/lighting/phase.rs says why): (HG of asymmetry lobe_g, the same with the phase's
+// once-scattered shape: for the Jendersie-d'Eon blend (1 - w) Draine + w HG, the Draine lobe of
+// the phase's alpha with asymmetry lobe_g). `model`, `params`: as phase_eval's.
+fn thin_lobe(model: u32, params: vec4f, cos_theta: f32, lobe_g: f32) -> vec2f {
+    let hg = henyey_greenstein(cos_theta, lobe_g);
+    if (model != 0u) {
+        return vec2f(hg, hg);
+    }
+    let alpha = params.z;
+    // draine_g_for_asymmetry in src/lighting/phase.rs.
+    var gd = lobe_g / 1.4;
+    for (var k = 0; k < 4; k++) {
+        let ratio = (1.0 + alpha * (3.0 + 2.0 * gd * gd) / 5.0) / (1.0 + alpha * (1.0 + 2.0 * gd * gd) / 3.0);
+        gd = clamp(lobe_g / ratio, -0.95, 0.95);
+    }
+    return vec2f(hg, (1.0 - params.w) * draine(cos_theta, gd, alpha) + params.w * hg);
+}
+
+// The share of a column's diffuse light a below its sunlit face scattered only once
+// (once_scattered_share in src/lighting/diffusion.rs): e^{-(1 - w f) a}.
+fn once_scattered_share(a: f32, w: f32, f: f32) -> f32 {
+    return exp(-(1.0 - w * f) * max(a, 0.0));
 }
 
 // How much brighter than its flux-weighted mean over directions a thin column's diffuse light

@@ -191,6 +191,7 @@ fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, sigma_t: f32, tau_view: f32,
     let g = u.ms_model.y;
     let beam = beam_light(u32(u.misc.y), u.phase, cos_theta, tau_sun, albedo, g, u.ms_model.z, u.ms_model.w);
     let chi2 = phase_second_moment(u32(u.misc.y), u.phase);
+    let lobe = thin_lobe(u32(u.misc.y), u.phase, cos_theta, thin_lobe_asymmetry(g));
     if (debug_mode() == DEBUG_SPHERE) {
         let offset = p - u.debug_sphere.xyz;
         let r = length(offset);
@@ -204,10 +205,10 @@ fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, sigma_t: f32, tau_view: f32,
         let w_out = clamp(0.5 + 0.5 * c / DE_MIN_MU0, 0.0, 1.0);
         var light = 0.0;
         if (w_out > 0.0) {
-            light += w_out * delta_eddington_source(min(outward, tau_sun), inward, max(c, DE_MIN_MU0), mu_view, cos_theta, albedo, g, chi2, beam, across);
+            light += w_out * delta_eddington_source(min(outward, tau_sun), inward, max(c, DE_MIN_MU0), mu_view, lobe, albedo, g, chi2, beam, across);
         }
         if (w_out < 1.0) {
-            light += (1.0 - w_out) * delta_eddington_source(min(inward, tau_sun), outward, max(-c, DE_MIN_MU0), -mu_view, cos_theta, albedo, g, chi2, beam, across);
+            light += (1.0 - w_out) * delta_eddington_source(min(inward, tau_sun), outward, max(-c, DE_MIN_MU0), -mu_view, lobe, albedo, g, chi2, beam, across);
         }
         return vec2f(light, 0.5);
     }
@@ -241,7 +242,7 @@ fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, sigma_t: f32, tau_view: f32,
     // The column's optical radius is the cloud body's, not the sample's: a wisp at a cloud's
     // edge sits in a body as dense as the rest (NOISE_CLOUD_BODY_DENSITY says why).
     let across = select(noise_cloud_optical_radius(u.shape.x, u.shape.y * u.shape.z), 1e30, debug_mode() == DEBUG_SLAB);
-    let light = delta_eddington_source(tau_sun * mu0, below, mu0, mu_view, cos_theta, albedo, g, chi2, beam, across);
+    let light = delta_eddington_source(tau_sun * mu0, below, mu0, mu_view, lobe, albedo, g, chi2, beam, across);
     return vec2f(light, ambient_share);
 }
 

@@ -514,7 +514,6 @@ fn delta_eddington_in_the_march_matches_its_cpu_mirror() {
     let single = render(MultipleScatteringModel::SingleOnly);
 
     let inv = (projection * view).inverse();
-    let g = phase.asymmetry();
     let mut worst = 0.0f32;
     for y in (0..H).step_by(7) {
         for x in (0..W).step_by(7) {
@@ -542,7 +541,7 @@ fn delta_eddington_in_the_march_matches_its_cpu_mirror() {
                     tau_across: f32::INFINITY,
                 };
                 let beam = beam_light(&phase, cos_theta, column.tau_sun, albedo);
-                let ms = delta_eddington_source(&column, albedo, g, phase.second_moment(), beam);
+                let ms = delta_eddington_source(&column, albedo, &phase, beam);
                 l += ((-extinction * s).exp() * albedo * extinction * 10.0 * ms * ds) as f64;
             }
             let i = (y * W + x) as usize;
