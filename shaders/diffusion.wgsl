@@ -33,6 +33,19 @@ fn noise_cloud_optical_radius(coverage: f32, peak_sigma_t: f32) -> f32 {
     return noise_cloud_radius(coverage) * NOISE_CLOUD_BODY_DENSITY * peak_sigma_t;
 }
 
+// The bounds (m) of diffuse_spread_radius (DIFFUSE_SPREAD_MIN / MAX in
+// src/lighting/diffusion.rs).
+const DIFFUSE_SPREAD_MIN: f32 = 50.0;
+const DIFFUSE_SPREAD_MAX: f32 = 2000.0;
+
+// How far (m) a noise-model cloud's diffuse light spreads sideways: the transport mean free
+// path of its body, 1 / (sigma_body (1 - g)), within [DIFFUSE_SPREAD_MIN, DIFFUSE_SPREAD_MAX]
+// (diffuse_spread_radius in src/lighting/diffusion.rs).
+fn diffuse_spread_radius(peak_sigma_t: f32, g: f32) -> f32 {
+    let transport = peak_sigma_t * NOISE_CLOUD_BODY_DENSITY * (1.0 - clamp(g, 0.0, 0.999));
+    return clamp(1.0 / max(transport, 1e-9), DIFFUSE_SPREAD_MIN, DIFFUSE_SPREAD_MAX);
+}
+
 // j0,1, the first zero of J0: a cylinder of radius a has the transverse buckling j0,1 / a.
 const BESSEL_J0_FIRST_ZERO: f32 = 2.4048256;
 

@@ -271,12 +271,14 @@ fn cancel_holds_the_sky_as_it_is_and_drops_what_was_scheduled() {
         mean < 0.01 * level,
         "mean change {mean} on a mean of {level}"
     );
-    // At most 2% of the pixels by more than 0.02: since the light march reads the detail
+    // At most 3% of the pixels by more than 0.02: since the light march reads the detail
     // erosion at every distance, the 8-bit map's edge shifts also move the shading of the edge
     // pixels behind them in the sun's direction (1.3% of the pixels here, 2026-12-04; 1.7% with
-    // the noise clouds' leaky columns, 2.8% when their optical radius was the sample's own).
+    // the noise clouds' leaky columns, 2.8% when their optical radius was the sample's own), and
+    // since the diffuse light takes the sun's depth from two more light marches a spread radius
+    // (370 m) to each side, the pixels near an edge on either side (2.1%, 2026-12-06).
     assert!(
-        moved * 50 < mid.len(),
+        moved * 100 < 3 * mid.len(),
         "{moved} of {} pixels moved",
         mid.len()
     );
