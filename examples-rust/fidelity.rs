@@ -1315,7 +1315,7 @@ fn main() -> Result<(), String> {
              sides (a horizontal pair turned by the ray's jitter; `spread_sun_depth`), up to a depth\n\
              of 16, taken at the ray's first sample in cloud and kept as an offset from the light\n\
              march's for the rest of the ray; single scattering and the beam keep the light march's\n\
-             own depth. The big cumulus from the ground: near base 0.74 -> 0.87, far part 1.37 -> 1.27.\n\
+             own depth. The big cumulus from the ground: near base 0.74 -> 0.88, far part 1.37 -> 1.26.\n\
              The noise views' FLIP 0.110 / 0.113 / 0.106 / 0.116 -> 0.091 / 0.113 / 0.100 / 0.116\n\
              (ratios 0.923 / 1.000 / 1.014 / 0.788 -> 0.970 / 1.001 / 1.022 / 0.800); the debug media\n\
              are homogeneous and keep their rows. Four points at every sample, a radius of 150 /\n\
