@@ -143,6 +143,11 @@ fn beam_light(model: u32, params: vec4f, cos_theta: f32, tau_sun: f32, albedo: f
     return light;
 }
 
+// Draine 2003's asymmetry over its g (draine_asymmetry_ratio in src/lighting/phase.rs).
+fn draine_asymmetry_ratio(g: f32, alpha: f32) -> f32 {
+    return (1.0 + alpha * (3.0 + 2.0 * g * g) / 5.0) / (1.0 + alpha * (1.0 + 2.0 * g * g) / 3.0);
+}
+
 // PhaseModel::broad_phase: light scattered n times in the broad (Draine) part of the beam, then
 // toward the camera. Only the Jendersie-d'Eon blend (model 0) has a broad part.
 fn broad_phase(model: u32, params: vec4f, cos_theta: f32, n: f32) -> f32 {
@@ -151,7 +156,7 @@ fn broad_phase(model: u32, params: vec4f, cos_theta: f32, n: f32) -> f32 {
     }
     let g_d = params.y;
     let alpha = params.z;
-    let s = g_d * (1.0 + alpha * (3.0 + 2.0 * g_d * g_d) / 5.0) / (1.0 + alpha * (1.0 + 2.0 * g_d * g_d) / 3.0);
+    let s = g_d * draine_asymmetry_ratio(g_d, alpha);
     let k = max(n, 1.0);
     return (1.0 - params.w) * draine(cos_theta, g_d * pow(s, k - 1.0), alpha)
         + params.w * draine(cos_theta, g_d * pow(s, k), alpha);
@@ -199,8 +204,7 @@ fn thin_lobe(model: u32, params: vec4f, cos_theta: f32, lobe_g: f32) -> vec2f {
     // draine_g_for_asymmetry in src/lighting/phase.rs.
     var gd = lobe_g / 1.4;
     for (var k = 0; k < 4; k++) {
-        let ratio = (1.0 + alpha * (3.0 + 2.0 * gd * gd) / 5.0) / (1.0 + alpha * (1.0 + 2.0 * gd * gd) / 3.0);
-        gd = clamp(lobe_g / ratio, -0.95, 0.95);
+        gd = clamp(lobe_g / draine_asymmetry_ratio(gd, alpha), -0.95, 0.95);
     }
     return vec2f(hg, (1.0 - params.w) * draine(cos_theta, gd, alpha) + params.w * hg);
 }

@@ -84,7 +84,12 @@ pub fn draine(cos_theta: f32, g: f32, alpha: f32) -> f32 {
 
 /// Draine 2003's asymmetry ⟨cos θ⟩: g (1 + α (3 + 2g²) / 5) / (1 + α (1 + 2g²) / 3).
 pub fn draine_asymmetry(g: f32, alpha: f32) -> f32 {
-    g * (1.0 + alpha * (3.0 + 2.0 * g * g) / 5.0) / (1.0 + alpha * (1.0 + 2.0 * g * g) / 3.0)
+    g * draine_asymmetry_ratio(g, alpha)
+}
+
+/// Draine 2003's asymmetry over its g: (1 + α (3 + 2g²) / 5) / (1 + α (1 + 2g²) / 3).
+fn draine_asymmetry_ratio(g: f32, alpha: f32) -> f32 {
+    (1.0 + alpha * (3.0 + 2.0 * g * g) / 5.0) / (1.0 + alpha * (1.0 + 2.0 * g * g) / 3.0)
 }
 
 /// The g of the Draine 2003 lobe of shape α whose asymmetry is `asymmetry`: the fixed point of
@@ -94,9 +99,7 @@ pub fn draine_asymmetry(g: f32, alpha: f32) -> f32 {
 pub fn draine_g_for_asymmetry(asymmetry: f32, alpha: f32) -> f32 {
     let mut g = asymmetry / 1.4;
     for _ in 0..4 {
-        let ratio =
-            (1.0 + alpha * (3.0 + 2.0 * g * g) / 5.0) / (1.0 + alpha * (1.0 + 2.0 * g * g) / 3.0);
-        g = (asymmetry / ratio).clamp(-0.95, 0.95);
+        g = (asymmetry / draine_asymmetry_ratio(g, alpha)).clamp(-0.95, 0.95);
     }
     g
 }
