@@ -617,6 +617,24 @@ fn parse_size(text: &str) -> Result<(u32, u32), String> {
     }
 }
 
+/// The scenes the full run (and `--model-cost`) measures: (weather, index into
+/// `standard_views`). At 1280x720 a converged reference takes about two and a half minutes on
+/// software Vulkan, so the full run takes every preset from the ground and one horizon view;
+/// quick mode one cumulus and one storm.
+fn bench_scenes(quick: bool) -> Vec<(Weather, usize)> {
+    if quick {
+        vec![(Weather::sparse(), 0), (Weather::stormy(), 3)]
+    } else {
+        vec![
+            (Weather::sparse(), 0),
+            (Weather::cloudy(), 0),
+            (Weather::overcast(), 0),
+            (Weather::stormy(), 0),
+            (Weather::cloudy(), 1),
+        ]
+    }
+}
+
 fn run() -> Result<(), String> {
     let mut quick = false;
     let mut size_arg = None;
@@ -679,25 +697,13 @@ fn run() -> Result<(), String> {
             return Ok(());
         }
         Mode::ModelCost => {
-            bench_model_cost::model_cost_section(size)?;
+            bench_model_cost::model_cost_section(size, &bench_scenes(quick))?;
             return Ok(());
         }
     }
     std::fs::create_dir_all(&out).map_err(|e| e.to_string())?;
     let started = Instant::now();
-    // At 1280x720 a converged reference takes about two and a half minutes on software Vulkan,
-    // so the full run takes every preset from the ground and one horizon view.
-    let scenes: Vec<(Weather, usize)> = if quick {
-        vec![(Weather::sparse(), 0), (Weather::stormy(), 3)]
-    } else {
-        vec![
-            (Weather::sparse(), 0),
-            (Weather::cloudy(), 0),
-            (Weather::overcast(), 0),
-            (Weather::stormy(), 0),
-            (Weather::cloudy(), 1),
-        ]
-    };
+    let scenes = bench_scenes(quick);
     let levels: Vec<Variant> = Quality::ALL.iter().map(|q| Variant::Level(*q)).collect();
     // The first scene also runs the default level with each optimisation switched off in turn
     // (sharing its reference).
