@@ -331,6 +331,40 @@ fn a_deck_seen_from_above_toward_the_sun_is_lit_through_its_whole_depth() {
 }
 
 #[test]
+fn a_thicker_deck_reflects_no_less_light() {
+    // Seen from above, a slab of optical depth τ1 + τ2 reflects every path that τ1 alone does
+    // (the top τ1 is the same medium) plus those that come back from below it: its reflected
+    // radiance can only grow with the depth, for any phase and albedo (the ground under it is
+    // black). The march's columns must keep that order in every view from above, from the
+    // zenith to 20° over the deck toward and away from the sun.
+    let size = (16, 9);
+    let sun_el = 30f32.to_radians();
+    let eye = Vec3::new(0.0, TOP + 1_500.0, 0.0);
+    for (view_el, azimuth) in [
+        (-90f32, 0.0f32),
+        (-55.0, 0.0),
+        (-20.0, 0.0),
+        (-55.0, 180.0),
+        (-20.0, 180.0),
+    ] {
+        let (e, a) = (view_el.to_radians(), azimuth.to_radians());
+        let forward = Vec3::new(e.cos() * a.sin(), e.sin(), -e.cos() * a.cos());
+        let up = if view_el <= -89.0 { Vec3::Z } else { Vec3::Y };
+        let mut f = frame(eye, forward, up, 20.0, 16.0 / 9.0);
+        f.sun.direction = Vec3::new(0.0, sun_el.sin(), -sun_el.cos());
+        let mut last = 0.0;
+        for tau in [0.5f32, 2.0, 8.0, 32.0] {
+            let mut s = slab_settings(tau / (TOP - BOTTOM), 0.999);
+            s.lighting.phase = PhaseModel::default();
+            let seen = mean_luminance(&march(&s, &f, size));
+            println!("from above, elevation {view_el}°, azimuth {azimuth}°, τ {tau}: {seen:.4}");
+            assert!(seen >= last * 0.99, "τ {tau}: {seen} after {last}");
+            last = seen;
+        }
+    }
+}
+
+#[test]
 fn the_default_march_answers_albedo_as_the_path_tracer_does() {
     // τ = 50 from below: from ω = 0.999 to 1 the diffuse light rises by several percent (the
     // path tracer's answer, same seed for both so the noise mostly cancels in the ratio).
