@@ -43,16 +43,12 @@ pub fn model_cost_section(size: (u32, u32), scenes: &[(Weather, usize)]) -> Resu
         let name = format!("{}, {}", weather.name, super::VIEW_NAMES[*view]);
         costs.push((scene_cost(&mut h, size, weather, *view, &name)?, name));
     }
-    let (lo, hi) = costs
-        .iter()
-        .fold((f64::INFINITY, 0.0f64), |(lo, hi), (c, _)| {
-            (lo.min(*c), hi.max(*c))
-        });
-    let worst = costs
+    let lo = costs.iter().map(|(c, _)| *c).fold(f64::INFINITY, f64::min);
+    let (hi, worst) = costs
         .iter()
         .max_by(|a, b| a.0.total_cmp(&b.0))
-        .map(|(_, n)| n.as_str())
-        .unwrap_or("none");
+        .map(|(c, n)| (*c, n.as_str()))
+        .unwrap_or((f64::NAN, "none"));
     let line = format!(
         "model cost {}x{} (medium, {} scenes, {ROUNDS} alternating rounds each): delta-Eddington / octaves {lo:.3}-{hi:.3} (worst: {worst})",
         size.0,

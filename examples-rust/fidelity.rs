@@ -490,7 +490,6 @@ fn compare(
 /// within 20%; FLIP at most 0.1 on the noise-model views. Written under the table, so that what
 /// the table meets and misses is never stale prose.
 fn against_targets(rows: &[Row]) -> String {
-    let off = |r: f64| (r - 1.0).abs();
     let slabs = |above: bool| -> Vec<&Row> {
         rows.iter()
             .filter(|r| !r.views.is_empty() && r.from_above == above)
@@ -564,9 +563,13 @@ fn against_targets(rows: &[Row]) -> String {
     md
 }
 
+/// How far a ratio is from 1 (the targets' measure).
+fn off(ratio: f64) -> f64 {
+    (ratio - 1.0).abs()
+}
+
 /// "views within 20%: N of M (outside: ...). Medians within 10%: ..." over `slabs`' rows.
 fn slab_summary(slabs: &[&Row]) -> String {
-    let off = |r: f64| (r - 1.0).abs();
     let views = slabs.iter().map(|r| r.views.len()).sum::<usize>();
     let within = slabs
         .iter()

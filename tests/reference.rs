@@ -303,6 +303,22 @@ fn the_default_march_carries_light_through_a_thick_slab() {
     assert!(octaves / traced < 0.05, "{}", octaves / traced);
 }
 
+/// The direction at `elevation_deg` above the horizontal and `azimuth_deg` from -z toward +x.
+fn toward(elevation_deg: f32, azimuth_deg: f32) -> Vec3 {
+    let (e, a) = (elevation_deg.to_radians(), azimuth_deg.to_radians());
+    Vec3::new(e.cos() * a.sin(), e.sin(), -e.cos() * a.cos())
+}
+
+/// 1.5 km above the slab's top, looking down at `view_el` (negative) degrees, at `azimuth`
+/// from the sun's (the sun 30° high), a 20° field at 16:9.
+fn from_above(view_el: f32, azimuth: f32) -> FrameInputs {
+    let up = if view_el <= -89.0 { Vec3::Z } else { Vec3::Y };
+    let eye = Vec3::new(0.0, TOP + 1_500.0, 0.0);
+    let mut f = frame(eye, toward(view_el, azimuth), up, 20.0, 16.0 / 9.0);
+    f.sun.direction = toward(30.0, 0.0);
+    f
+}
+
 #[test]
 fn a_deck_seen_from_above_toward_the_sun_is_lit_through_its_whole_depth() {
     // τ = 20 (σt 0.04 over 500 m), HG 0.8, sun 30° high, seen from 1.5 km above the top looking
@@ -313,11 +329,7 @@ fn a_deck_seen_from_above_toward_the_sun_is_lit_through_its_whole_depth() {
     // not hold.
     let size = (16, 9);
     let s = thick_hg_slab();
-    let (sun_el, view_el) = (30f32.to_radians(), -20f32.to_radians());
-    let eye = Vec3::new(0.0, TOP + 1_500.0, 0.0);
-    let forward = Vec3::new(0.0, view_el.sin(), -view_el.cos());
-    let mut f = frame(eye, forward, Vec3::Y, 20.0, 16.0 / 9.0);
-    f.sun.direction = Vec3::new(0.0, sun_el.sin(), -sun_el.cos());
+    let f = from_above(-20.0, 0.0);
     let r = renderer(s.clone());
     let traced = mean_luminance(&trace(&r, &f, size, Orders::All, 256));
     let model = mean_luminance(&march(&s, &f, size));
@@ -338,8 +350,6 @@ fn a_thicker_deck_reflects_no_less_light() {
     // black). The march's columns must keep that order in every view from above, from the
     // zenith to 20° over the deck toward and away from the sun.
     let size = (16, 9);
-    let sun_el = 30f32.to_radians();
-    let eye = Vec3::new(0.0, TOP + 1_500.0, 0.0);
     for (view_el, azimuth) in [
         (-90f32, 0.0f32),
         (-55.0, 0.0),
@@ -347,11 +357,7 @@ fn a_thicker_deck_reflects_no_less_light() {
         (-55.0, 180.0),
         (-20.0, 180.0),
     ] {
-        let (e, a) = (view_el.to_radians(), azimuth.to_radians());
-        let forward = Vec3::new(e.cos() * a.sin(), e.sin(), -e.cos() * a.cos());
-        let up = if view_el <= -89.0 { Vec3::Z } else { Vec3::Y };
-        let mut f = frame(eye, forward, up, 20.0, 16.0 / 9.0);
-        f.sun.direction = Vec3::new(0.0, sun_el.sin(), -sun_el.cos());
+        let f = from_above(view_el, azimuth);
         let mut last = 0.0;
         for tau in [0.5f32, 2.0, 8.0, 32.0] {
             let mut s = slab_settings(tau / (TOP - BOTTOM), 0.999);
