@@ -746,6 +746,10 @@ fn main() -> Result<(), String> {
         .position(|a| a == "--only")
         .and_then(|i| args.get(i + 1))
         .cloned();
+    const SECTIONS: [&str; 4] = ["slab", "above", "sphere", "noise"];
+    if let Some(o) = only.as_deref().filter(|o| !SECTIONS.contains(o)) {
+        return Err(format!("--only {o}: one of {}", SECTIONS.join(", ")));
+    }
     let run = |section: &str| only.as_deref().is_none_or(|o| o == section);
     // `--view sparse_ground|overcast_ground|sparse_above`: one noise view (each reference takes
     // minutes to trace on software Vulkan).
