@@ -1395,7 +1395,32 @@ fn main() -> Result<(), String> {
              face instead of the column's thickness (tried before the fade), darkened the zenith and\n\
              away views from above to 0.55-0.71 at τ = 20: the light a camera above sees has turned\n\
              back, which a lobe around the sun does not hold either. Thin slabs seen from above 20° away from the sun (backscatter,\n\
-             170° from it) are 0.67-0.74 at τ = 1 and 5.\n",
+             170° from it) are 0.67-0.74 at τ = 1 and 5.\n\n\
+             Reflection (twelfth session). An independent light tracer of the slabs\n\
+             (docs/fidelity/slab_light_tracer.py's method, every order scored toward 42 directions\n\
+             above each slab, both phases, τ 1 / 5 / 20, sun 30° / 60°) showed where the light a\n\
+             camera above sees goes missing: the reflected light is brighter toward the sun's forward\n\
+             azimuth and toward the horizon through the 10th order of scattering (HG 0.8, τ 5, sun\n\
+             30°, 20° above the horizon: 3.9 times as bright toward the sun as away), and the P1\n\
+             field has no azimuth. The march was 0.49 of the tracer there, 205 of the 504 directions\n\
+             were outside 20%, the reflected flux 0.61-0.98 of the tracer's. Light going up now takes\n\
+             the P1 field's upward flux π (I0 - 2/3 g I1), a share of it in an HG lobe of asymmetry\n\
+             g³ around the sun (light scattered three times) and the rest even; the share is all of\n\
+             it in a thin column and (1 - μ0) in a thick one (`reflected_source`): 76 of the 504\n\
+             outside, flux 0.79-1.05; at albedo 1 the droplet phase sends out 0.907-0.992 of the light\n\
+             (0.835-0.988 before). On this table: the slabs from above 53 -> 71 of 80 views within\n\
+             20% (medians 10 -> 13 of 16); the back-lit sphere's disc 0.795 -> 0.923 and contrast\n\
+             0.857 -> 1.132, the side-lit one's 0.731 -> 0.839 and 0.684 -> 0.925 (the sunlit half\n\
+             is the column's reflection seen from its lit side: all four sphere targets met); the\n\
+             rows from below unchanged. Noise views: from the ground 0.091 -> 0.090, overcast 0.113\n\
+             -> 0.109, up close 0.116 -> 0.118 (0.800 -> 0.791), from 12 km above 0.100 -> 0.109\n\
+             (1.022 -> 0.959): its sun is behind the camera, and the brightest fifths of its opaque\n\
+             pixels went 0.98 / 1.01 -> 0.93 / 0.95, as the thick slabs seen from above 55° away\n\
+             from a sun 30° high (0.81-0.84; they were 1.13-1.15). Alternatives, same table: all of\n\
+             the flux in one lobe of asymmetry g g' (1 + e^{-τ*}) / 2: spheres 0.815 / 0.907 and\n\
+             0.871 / 0.928, slabs from above 69, from 12 km 0.109; the lobe at 0.5 for both phases\n\
+             0.856 / 0.991, 0.844 / 0.916, 73, 0.108; the P1 field's own elevation profile for thick\n\
+             columns 0.842 / 0.933, 0.797 / 0.820, 65, 0.113 (0.918).\n",
         );
         md.push_str("\n## Pictures\n\n");
         let mut names: Vec<String> = std::fs::read_dir(&dir)

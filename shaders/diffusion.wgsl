@@ -168,9 +168,11 @@ fn broad_phase(model: u32, params: vec4f, cos_theta: f32, n: f32) -> f32 {
 // seen through the phase, I0 + g mu I1 in a thick column (mu: the light's direction toward the
 // camera against the downward vertical), the same energy in an HG lobe of asymmetry g g'
 // around the sun in a thin one, blended by 1 - e^{-c tau*'} (c = DE_DIFFUSE_CROSSING for a
-// camera below the sample, 1 for one above). `lobe`: thin_lobe's shapes of that lobe toward the
-// camera (the HG lobe, the phase's once-scattered shape), mixed by once_scattered_share.
-fn delta_eddington_source(tau_above: f32, tau_below: f32, mu0: f32, mu_view: f32, lobe_shapes: vec2f, albedo: f32, g: f32, chi2: f32, beam: f32, tau_across: f32) -> f32 {
+// camera below the sample, 1 for one above); light going up toward a camera above takes the P1
+// field's upward flux, part of it in a lobe around the sun, instead (reflected_source). `lobe`:
+// thin_lobe's shapes of that lobe toward the camera (the HG lobe, the phase's once-scattered
+// shape), mixed by once_scattered_share. `cos_theta`: the scattering angle's cosine.
+fn delta_eddington_source(tau_above: f32, tau_below: f32, mu0: f32, mu_view: f32, cos_theta: f32, lobe_shapes: vec2f, albedo: f32, g: f32, chi2: f32, beam: f32, tau_across: f32) -> f32 {
     let w = clamp(albedo, 0.0, DE_MAX_ALBEDO);
     let m0 = max(mu0, 1e-3);
     let a = tau_above;
@@ -181,7 +183,44 @@ fn delta_eddington_source(tau_above: f32, tau_below: f32, mu0: f32, mu_view: f32
     let lobe = 4.0 * PI * i.x * shape * thin_column_limb(a + tau_below, w, f, mu_view, chi2);
     let crossing = mix(1.0, DE_DIFFUSE_CROSSING, smoothstep(-0.25, 0.25, mu_view));
     let thick = 1.0 - exp(-(a + tau_below) * (1.0 - w * f) * crossing);
-    return max(beam + mix(lobe, p1, thick), 0.0);
+    var seen = mix(lobe, p1, thick);
+    // Light going up, out of the sunlit face (a camera above sees the column's reflection): the
+    // P1 field's upward flux, part of it in a lobe around the sun (reflected_source).
+    let up = 1.0 - smoothstep(-DE_REFLECTED_BLEND, DE_REFLECTED_BLEND, mu_view);
+    if (up > 0.0) {
+        let reflected = reflected_source(i.x, i.y, g, m0, cos_theta, (a + tau_below) * (1.0 - w * f))
+            * thin_column_limb(a + tau_below, w, f, mu_view, chi2);
+        seen = mix(seen, reflected, up);
+    }
+    return max(beam + seen, 0.0);
+}
+
+// Over |mu_view| below this the light toward the camera goes from the reflected light (going
+// up) to the diffuse field going down (REFLECTED_BLEND in src/lighting/diffusion.rs).
+const DE_REFLECTED_BLEND: f32 = 0.1;
+
+// The light a column's diffuse field sends up toward a camera above (per unit sun irradiance):
+// the P1 field's upward flux pi (I0 - 2/3 g I1), a share `memory` of it in an HG lobe of
+// asymmetry g^3 around the sun's light, the rest even; memory = e^{-tau*} + (1 - e^{-tau*})
+// (1 - mu0) (reflected_source in src/lighting/diffusion.rs says why).
+fn reflected_source(i0: f32, i1: f32, g: f32, mu0: f32, cos_theta: f32, tau_scaled: f32) -> f32 {
+    let flux_up = max(PI * (i0 - 2.0 / 3.0 * g * i1), 0.0);
+    let thin = exp(-max(tau_scaled, 0.0));
+    let memory = thin + (1.0 - thin) * (1.0 - mu0);
+    let lobe_g = clamp(g * g * g, -0.6, 0.6);
+    let lobe = henyey_greenstein(cos_theta, lobe_g) / upward_lobe_flux(mu0, lobe_g);
+    return flux_up * ((1.0 - memory) / PI + memory * lobe);
+}
+
+// The flux an HG lobe of asymmetry g around the sun's light (going down at cosine mu0) sends
+// up: its Legendre series to l = 6 (upward_lobe_flux in src/lighting/diffusion.rs).
+fn upward_lobe_flux(mu0: f32, g: f32) -> f32 {
+    let x2 = mu0 * mu0;
+    let p2 = 0.5 * (3.0 * x2 - 1.0);
+    let p4 = (35.0 * x2 * x2 - 30.0 * x2 + 3.0) / 8.0;
+    let p6 = (231.0 * x2 * x2 * x2 - 315.0 * x2 * x2 + 105.0 * x2 - 5.0) / 16.0;
+    let g2 = g * g;
+    return 0.25 - 0.5 * g * mu0 + 5.0 / 16.0 * g2 * p2 - 3.0 / 32.0 * g2 * g2 * p4 + 13.0 / 256.0 * g2 * g2 * g2 * p6;
 }
 
 // The asymmetry of the thin column's lobe around the sun, g g' (g' = (g - f) / (1 - f), the

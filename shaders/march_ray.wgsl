@@ -240,10 +240,10 @@ fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, tau_diffuse: f32, sigma_t: f
         let w_out = clamp(0.5 + 0.5 * c / DE_MIN_MU0, 0.0, 1.0);
         var light = 0.0;
         if (w_out > 0.0) {
-            light += w_out * delta_eddington_source(min(outward, tau_sun), inward, max(c, DE_MIN_MU0), mu_view, lobe, albedo, g, chi2, beam, across);
+            light += w_out * delta_eddington_source(min(outward, tau_sun), inward, max(c, DE_MIN_MU0), mu_view, cos_theta, lobe, albedo, g, chi2, beam, across);
         }
         if (w_out < 1.0) {
-            light += (1.0 - w_out) * delta_eddington_source(min(inward, tau_sun), outward, max(-c, DE_MIN_MU0), -mu_view, lobe, albedo, g, chi2, beam, across);
+            light += (1.0 - w_out) * delta_eddington_source(min(inward, tau_sun), outward, max(-c, DE_MIN_MU0), -mu_view, cos_theta, lobe, albedo, g, chi2, beam, across);
         }
         return vec2f(light, 0.5);
     }
@@ -281,7 +281,7 @@ fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, tau_diffuse: f32, sigma_t: f
     // The column's optical radius is the cloud body's, not the sample's: a wisp at a cloud's
     // edge sits in a body as dense as the rest (NOISE_CLOUD_BODY_DENSITY says why).
     let across = select(noise_cloud_optical_radius(u.shape.x, u.shape.y * u.shape.z), 1e30, debug_mode() == DEBUG_SLAB);
-    let light = delta_eddington_source(tau_diffuse * mu0, below, mu0, mu_view, lobe, albedo, g, chi2, beam, across);
+    let light = delta_eddington_source(tau_diffuse * mu0, below, mu0, mu_view, cos_theta, lobe, albedo, g, chi2, beam, across);
     return vec2f(light, ambient_share);
 }
 

@@ -13,6 +13,11 @@ Unlike the path tracer (camera paths with next-event estimation toward the sun),
 travel where this phase's narrow forward peak sends them, so the peak does not make fireflies.
 
     python3 docs/fidelity/slab_light_tracer.py jd 1 30 2e6 [seed]   # phase, tau, sun elevation, photons
+
+With a sixth argument `centres` it scores the centre directions of the views instead, from below
+and from above (cameras above the slab looking down 90 / 55 / 20 deg away from the sun's azimuth
+and 55 / 20 deg toward it: the reflected light; src/lighting/diffusion.rs's
+a_slab_seen_from_above_matches_an_independent_light_tracer).
 """
 import math
 import sys
@@ -80,7 +85,16 @@ def view_directions(elevation):
 
 
 sun = sun_at(SUN_ELEVATION, 0)  # toward the sun, y up
-views = {e: view_directions(e) for e in (90, 55, 20)}
+CENTRES = len(sys.argv) > 6 and sys.argv[6] == "centres"
+if CENTRES:
+    # (name, the camera's look direction): below looking up, above looking down.
+    views = {
+        f"{side} {e} {'toward' if a == 0 else 'away'}": np.array([sun_at(s * e, a)])
+        for side, s in (("below", 1), ("above", -1))
+        for e, a in ((90, 180), (55, 180), (20, 180), (55, 0), (20, 0))
+    }
+else:
+    views = {e: view_directions(e) for e in (90, 55, 20)}
 score = {e: 0.0 for e in views}
 # Optical height above the slab's bottom; photons enter at the top travelling away from the sun.
 z = np.full(PHOTONS, TAU)
@@ -102,9 +116,11 @@ for _ in range(5000):
     for e, dirs in views.items():
         total = 0.0
         for v in dirs:
-            # The camera looks along v (up); the light it sees travels along -v.
+            # The camera looks along v; the light it sees travels along -v, out of the slab's
+            # bottom (v up) or its top (v down).
             c = np.clip(direction[idx] @ (-v), -1, 1)
-            total += np.sum(weight[idx] * phase(c) * np.exp(-z[idx] / v[1]) / v[1])
+            out = z[idx] if v[1] > 0 else TAU - z[idx]
+            total += np.sum(weight[idx] * phase(c) * np.exp(-out / abs(v[1])) / abs(v[1]))
         score[e] += total / len(dirs)
     c = sample_cos(len(idx))
     s = np.sqrt(np.maximum(1 - c * c, 0))
@@ -118,4 +134,4 @@ for _ in range(5000):
 
 # Photons per unit horizontal area stand for the irradiance on it, 10 mu0.
 norm = 10 * sun[1] / PHOTONS
-print(f"{PHASE} tau {TAU:g} sun {SUN_ELEVATION:g}: " + " / ".join(f"{e}: {score[e] * norm:.5f}" for e in (90, 55, 20)))
+print(f"{PHASE} tau {TAU:g} sun {SUN_ELEVATION:g}: " + " / ".join(f"{e}: {score[e] * norm:.5f}" for e in views))
