@@ -555,8 +555,8 @@ fn against_targets(rows: &[Row]) -> String {
          (`single_scattering_matches_the_slab_closed_form`, tests/reference.rs, and\n  \
          `homogeneous_slab_matches_closed_form_single_scattering`, tests/gpu.rs); so is the\n  \
          model's energy, never more light out of a slab than in (src/lighting/diffusion.rs:\n  \
-         `the_march_of_the_model_sends_out_no_more_than_comes_in` for HG lobes, 2-11% lost at\n  \
-         albedo 1, and `the_droplet_phases_march_sends_out_no_more_than_comes_in`, 1-17% lost);\n  \
+         `the_march_of_the_model_sends_out_no_more_than_comes_in` for HG lobes, 2-10% lost at\n  \
+         albedo 1, and `the_droplet_phases_march_sends_out_no_more_than_comes_in`, 1-9% lost);\n  \
          the model's cost against the octaves is `bench --model-cost` on each of the\n  \
          benchmark's scenes (docs/performance.md).\n",
     );

@@ -325,8 +325,9 @@ fn a_deck_seen_from_above_toward_the_sun_is_lit_through_its_whole_depth() {
     // down 20° toward the sun: the view ray comes in through the lit top. The rule that bounds
     // the column below by the view ray's depth when looking toward the sun (a cloud's dark
     // side) read this deck as thin: 0.34 of the path tracer (docs/fidelity.md, 32x18). Without
-    // it 0.54: what is left is the forward sheen of the first few orders, which the model does
-    // not hold.
+    // it 0.54: what was left was the forward sheen of the first ten orders, which the P1 field
+    // (no azimuth) does not hold. With the reflected light in a lobe around the sun
+    // (reflected_source in src/lighting/diffusion.rs) 1.115.
     let size = (16, 9);
     let s = thick_hg_slab();
     let f = from_above(-20.0, 0.0);
@@ -337,7 +338,7 @@ fn a_deck_seen_from_above_toward_the_sun_is_lit_through_its_whole_depth() {
         "τ 20 slab from above, 20° toward the sun: march / path traced {:.3}",
         model / traced
     );
-    assert!(model / traced > 0.45, "{}", model / traced);
+    assert!(model / traced > 0.8, "{}", model / traced);
     // Nor brighter than the light that is there.
     assert!(model / traced < 1.2, "{}", model / traced);
 }
