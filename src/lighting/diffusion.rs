@@ -409,12 +409,13 @@ pub(crate) const REFLECTED_BLEND: f32 = 0.1;
 /// tracer's radiance is 3.9 times as high looking toward the sun as looking away. The P1 field
 /// alone has no azimuth: the march was 0.49 of the tracer there and 0.93 away, 205 of the 504
 /// directions were outside 20%, and the reflected flux was 0.61-0.98 of the tracer's. With
-/// this source: 76 outside, flux 0.79-1.05. Measured alternatives (same test): all of it in a
-/// lobe of the thin lobe's g g' (1 + e^{-τ*}) / 2, 100 (thick decks under a high sun 1.2-1.6
-/// toward the horizon, where the tracer's light is nearly even; on the GPU the spheres read
-/// about the same, the slabs from above 69 of 80 within 20% against 73); lobe asymmetry g g' 82,
-/// 0.6 91; the P1 field's own elevation profile for thick columns 89 (the view from 12 km
-/// above 0.918 of the path tracer); Chandrasekhar's (1 + 2μ) / (μ + μ0) 86 (0.937).
+/// this source: 76 outside, flux 0.79-1.05 (docs/fidelity.md: the slabs from above 71 of 80
+/// views within 20%, 53 before). Measured alternatives (same test): all of it in one lobe of
+/// the thin lobe's g g' (1 + e^{-τ*}) / 2, 100 (thick decks under a high sun 1.2-1.6 toward the
+/// horizon, where the tracer's light is nearly even; fidelity 69 of 80); the lobe's asymmetry
+/// 0.5 for every phase 75 (fidelity 73, but an isotropic phase would get a lobe), g g' 82, 0.6
+/// 91; the P1 field's own elevation profile for thick columns 89 (the view from 12 km above
+/// 0.918 of the path tracer); Chandrasekhar's (1 + 2μ) / (μ + μ0) 86 (0.937).
 pub(crate) fn reflected_source(
     i0: f32,
     i1: f32,
