@@ -16,8 +16,11 @@ travel where this phase's narrow forward peak sends them, so the peak does not m
 
 With a sixth argument `centres` it scores the centre directions of the views instead, from below
 and from above (cameras above the slab looking down 90 / 55 / 20 deg away from the sun's azimuth
-and 55 / 20 deg toward it: the reflected light; src/lighting/diffusion.rs's
-a_slab_seen_from_above_matches_an_independent_light_tracer).
+and 55 / 20 deg toward it: the reflected light).
+
+src/lighting/slab_light_tracer.rs is this tracer in Rust (the same method, its own random
+numbers): the slab tests in src/lighting/diffusion.rs compute their oracle with it, within 1% of
+this script's numbers at 10^6 photons (HG 0.8, tau 5, sun 30 deg, the view centres above).
 """
 import math
 import sys

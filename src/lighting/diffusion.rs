@@ -524,6 +524,7 @@ pub fn seen_ambient_share(above: f32, below: f32, g: f32, mu_view: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::lighting::slab_light_tracer::slab_radiance;
 
     /// Upward diffuse flux at the top, downward diffuse flux at the bottom and the direct beam
     /// left at the bottom, per unit sun irradiance (P1 fluxes: π (I0 ∓ 2/3 I1)).
@@ -973,20 +974,35 @@ mod tests {
 
     #[test]
     fn a_slab_seen_from_below_matches_an_independent_light_tracer() {
-        // Oracle: docs/fidelity/slab_light_tracer.py hg 5 30 1e6 (photons from the sun through
-        // an HG 0.8 slab of τ = 5, albedo 0.999, every collision scored toward the camera; it
-        // agrees with the path tracer within 1-2%): 0.818 / 0.618 / 0.449 for the fidelity
-        // program's views at elevations 90° / 55° / 20° away from a sun at 30° (the mean over
-        // their 20° fields; here their centres). The thin lobe's blend into the P1 field by the
-        // whole column's depth put the two slanted views at 1.18 / 1.15 of it.
+        // Oracle: the light tracer (slab_light_tracer: photons from the sun through an HG 0.8
+        // slab of τ = 5, albedo 0.999, every collision scored toward the camera; it agrees
+        // with the path tracer within 1-2%), 10⁶ photons: 0.816 / 0.613 / 0.450 toward the
+        // centres of the fidelity program's views at elevations 90° / 55° / 20° away from a
+        // sun at 30°. The march: 0.964 / 0.989 / 0.924 of it, held to 10% (the target
+        // is 20% per view). The thin lobe's blend into the P1 field by the whole column's depth
+        // put the two slanted views at 1.18 / 1.15 of it. (Against the python tracer's means
+        // over the views' fields, 0.818 / 0.618 / 0.449, this test held 8%.)
         let e = 30f32.to_radians();
         let sun = [0.0, e.sin(), -e.cos()];
-        for (elevation, traced) in [(90f32, 0.818), (55.0, 0.618), (20.0, 0.449)] {
+        let elevations = [90f32, 55.0, 20.0];
+        let looks: Vec<Vec<[f64; 3]>> = elevations
+            .iter()
+            .map(|e| {
+                vec![[
+                    0.0,
+                    e.to_radians().sin() as f64,
+                    e.to_radians().cos() as f64,
+                ]]
+            })
+            .collect();
+        let traced = slab_radiance(&hg(0.8), 5.0, 0.999, 30.0, &looks, 1_000_000, 7);
+        for (elevation, traced) in elevations.into_iter().zip(traced) {
             let v = elevation.to_radians();
             let view = [0.0, v.sin(), v.cos()];
             let ratio = marched_radiance_below(5.0, sun, view, 0.999, &hg(0.8)) / traced;
+            println!("view {elevation}°: march / light tracer {ratio:.3}");
             assert!(
-                (ratio - 1.0).abs() < 0.08,
+                (ratio - 1.0).abs() < 0.1,
                 "view {elevation}°: march / light tracer {ratio:.3}"
             );
         }
@@ -994,34 +1010,44 @@ mod tests {
 
     #[test]
     fn a_slab_seen_from_above_matches_an_independent_light_tracer() {
-        // Oracle: docs/fidelity/slab_light_tracer.py hg 5 30 1e6 7 centres (HG 0.8, τ = 5,
-        // albedo 0.999, sun 30° high, sun illuminance 10): the radiance toward cameras above
-        // the slab looking down 90° / 55° / 20° away from the sun's azimuth and 55° / 20°
-        // toward it. Toward the sun near the horizon the reflected light is brightest, through
-        // the 10th order of scattering. The march: 0.912 / 0.864 / 0.895 / 0.901 / 0.973 of the
-        // tracer; with the P1 field alone, which has no azimuth (before reflected_source),
-        // 1.091 / 1.107 / 0.924 / 0.786 / 0.493.
+        // Oracle: the light tracer (slab_light_tracer; HG 0.8, τ = 5, albedo 0.999, sun 30°
+        // high, 10⁶ photons): the radiance toward cameras above the slab looking down 90° / 55°
+        // / 20° away from the sun's azimuth and 55° / 20° toward it, 0.541 / 0.529 / 0.594 /
+        // 0.879 / 2.280. Toward the sun near the horizon the reflected light is brightest,
+        // through the 10th order of scattering. The march: 0.912 / 0.859 / 0.890 / 0.905 /
+        // 0.972 of the tracer; with the P1 field alone, which has no azimuth (before
+        // reflected_source), about 1.09 / 1.10 / 0.92 / 0.79 / 0.49.
         let e = 30f32.to_radians();
         let sun = [0.0, e.sin(), -e.cos()];
-        for (elevation, toward, traced) in [
-            (90f32, false, 0.5415),
-            (55.0, false, 0.5264),
-            (20.0, false, 0.5910),
-            (55.0, true, 0.8832),
-            (20.0, true, 2.2759),
-        ] {
-            // The camera looks down along `look`, toward the sun's azimuth (-z) or away.
+        let views = [
+            (90f32, false),
+            (55.0, false),
+            (20.0, false),
+            (55.0, true),
+            (20.0, true),
+        ];
+        // The camera looks down along `look`, toward the sun's azimuth (-z) or away.
+        let look = |(elevation, toward): (f32, bool)| {
             let v = elevation.to_radians();
-            let along = if toward { -v.cos() } else { v.cos() };
-            let look = [0.0, -v.sin(), along];
+            [0.0, -v.sin(), if toward { -v.cos() } else { v.cos() }]
+        };
+        let looks: Vec<Vec<[f64; 3]>> = views
+            .iter()
+            .map(|&view| vec![look(view).map(f64::from)])
+            .collect();
+        let traced = slab_radiance(&hg(0.8), 5.0, 0.999, 30.0, &looks, 1_000_000, 7);
+        for (view, traced) in views.into_iter().zip(traced) {
+            let look = look(view);
             let cos_theta = sun[0] * look[0] + sun[1] * look[1] + sun[2] * look[2];
             let marched =
                 10.0 * radiance_out(5.0, sun[1], look[1], cos_theta, 0.999, &hg(0.8), 2000);
             let ratio = marched / traced;
+            println!("{}°: march / light tracer {ratio:.3}", view.0);
             assert!(
                 (ratio - 1.0).abs() < 0.2,
-                "{elevation}° {}: march / light tracer {ratio:.3}",
-                if toward { "toward" } else { "away" }
+                "{}° {}: march / light tracer {ratio:.3}",
+                view.0,
+                if view.1 { "toward" } else { "away" }
             );
         }
     }
@@ -1060,6 +1086,18 @@ mod tests {
     /// directions (docs/fidelity/slab_light_tracer.py's view_directions: 32x18 pixels, a 20°
     /// vertical field, looking up at `elevation` away from the sun's azimuth; y up).
     fn over_the_view(elevation: f32, f: impl Fn([f32; 3]) -> f64) -> f64 {
+        let directions = view_directions(elevation);
+        let n = directions.len();
+        directions
+            .into_iter()
+            .map(|v| f([v[0] as f32, v[1] as f32, v[2] as f32]))
+            .sum::<f64>()
+            / n as f64
+    }
+
+    /// The light tracer's subset of a fidelity slab view's pixel directions (see
+    /// [`over_the_view`]).
+    fn view_directions(elevation: f32) -> Vec<[f64; 3]> {
         use glam::Vec3;
         let e = elevation.to_radians();
         let forward = Vec3::new(0.0, e.sin(), e.cos());
@@ -1071,37 +1109,34 @@ mod tests {
         let right = forward.cross(up).normalize();
         let up = right.cross(forward);
         let (t, aspect) = (10f32.to_radians().tan(), 32.0 / 18.0);
-        let mut sum = 0.0;
-        let mut n = 0;
+        let mut directions = Vec::new();
         for j in (0..18).step_by(3) {
             for i in (0..32).step_by(4) {
                 let x = (i as f32 + 2.0) / 32.0 * 2.0 - 1.0;
                 let y = 1.0 - (j as f32 + 1.5) / 18.0 * 2.0;
                 let v = (forward + x * t * aspect * right + y * t * up).normalize();
-                sum += f(v.to_array());
-                n += 1;
+                directions.push([v.x as f64, v.y as f64, v.z as f64]);
             }
         }
-        sum / n as f64
+        directions
     }
 
     #[test]
     fn a_thin_droplet_slab_keeps_the_phases_side_scattering_minimum() {
-        // Oracle: docs/fidelity/slab_light_tracer.py jd 1 30 2e5 (the droplet phase, τ = 1,
-        // sun 30°; it agrees with the path tracer within 1-5%): 0.2263 / 0.0727 / 0.2605 over
+        // Oracle: the light tracer (slab_light_tracer; the droplet phase, τ = 1, sun 30°, 2·10⁵
+        // photons; it agrees with the path tracer within 1-5%): 0.2242 / 0.0720 / 0.2475 over
         // the views at elevations 90° / 55° / 20° away from the sun, 120° / 95° / 130° from it.
         // With the thin lobe an HG lobe the middle view, in the phase's side-scattering
-        // minimum, came out 1.27 times the light tracer (docs/fidelity.md, 2026-12-06); now
-        // 1.07 / 1.01 / 0.79. Near the horizon the model stays short (the path tracer's 0.2474
-        // there puts it at 0.83): that view is held to 25%, the others to 10%.
+        // minimum, came out 1.27 times the tracer (docs/fidelity.md, 2026-12-06); now
+        // 1.08 / 1.02 / 0.83. Near the horizon the model stays short: that view is held to
+        // 20%, the others to 10%.
         let e = 30f32.to_radians();
         let sun = [0.0, e.sin(), -e.cos()];
-        for (elevation, traced, within) in [
-            (90f32, 0.2263, 0.10),
-            (55.0, 0.0727, 0.10),
-            (20.0, 0.2605, 0.25),
-        ] {
-            let phase = PhaseModel::default();
+        let phase = PhaseModel::default();
+        let views = [(90f32, 0.10), (55.0, 0.10), (20.0, 0.20)];
+        let fields: Vec<Vec<[f64; 3]>> = views.iter().map(|&(e, _)| view_directions(e)).collect();
+        let traced = slab_radiance(&phase, 1.0, 0.999, 30.0, &fields, 200_000, 7);
+        for ((elevation, within), traced) in views.into_iter().zip(traced) {
             let marched = over_the_view(elevation, |view| {
                 marched_radiance_below(1.0, sun, view, 0.999, &phase)
             });

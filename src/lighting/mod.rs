@@ -5,3 +5,5 @@
 pub mod diffusion;
 pub mod phase;
 pub mod scattering;
+#[cfg(test)]
+pub(crate) mod slab_light_tracer;
