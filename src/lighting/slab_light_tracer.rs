@@ -11,6 +11,8 @@
 //! narrow forward peak makes no fireflies; and nothing here is shared with the march but the
 //! phase function's definition.
 
+use glam::DVec3;
+
 use crate::lighting::phase::PhaseModel;
 
 /// PCG32 (O'Neill 2014, XSH-RR output): the tracer's own random numbers, fixed by a seed.
@@ -76,23 +78,6 @@ impl PhaseSampler {
     }
 }
 
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [
-        a[1] * b[2] - a[2] * b[1],
-        a[2] * b[0] - a[0] * b[2],
-        a[0] * b[1] - a[1] * b[0],
-    ]
-}
-
-fn normalize(a: [f64; 3]) -> [f64; 3] {
-    let l = dot(a, a).sqrt();
-    [a[0] / l, a[1] / l, a[2] / l]
-}
-
 /// The radiance each camera sees of a homogeneous slab of optical depth `tau` and albedo
 /// `albedo` lit by a sun `sun_elevation_deg` high (toward the sun: (0, sin e, -cos e), y up),
 /// in the fidelity program's units (sun illuminance 10). Each camera is a set of look
@@ -108,17 +93,17 @@ pub(crate) fn slab_radiance(
     seed: u64,
 ) -> Vec<f64> {
     let e = sun_elevation_deg.to_radians();
-    let sun = [0.0, e.sin(), -e.cos()];
+    let sun = DVec3::new(0.0, e.sin(), -e.cos());
     let sampler = PhaseSampler::new(phase);
     let mut rng = Pcg32::new(seed);
     let mut score = vec![0.0f64; cameras.len()];
     for _ in 0..photons {
         // Optical height above the slab's bottom; the photon enters the top.
         let mut z = tau;
-        let mut d = [-sun[0], -sun[1], -sun[2]];
+        let mut d = -sun;
         let mut weight = 1.0;
         for _ in 0..5000 {
-            let z_next = z - rng.uniform().ln() * d[1];
+            let z_next = z - rng.uniform().ln() * d.y;
             if !(0.0..=tau).contains(&z_next) {
                 break;
             }
@@ -129,9 +114,10 @@ pub(crate) fn slab_radiance(
                 for &v in looks {
                     // The light the camera sees travels along -v, out of the bottom (v up) or
                     // the top (v down).
-                    let c = -dot(d, v);
-                    let out = if v[1] > 0.0 { z } else { tau - z };
-                    let mu = v[1].abs();
+                    let v = DVec3::from_array(v);
+                    let c = -d.dot(v);
+                    let out = if v.y > 0.0 { z } else { tau - z };
+                    let mu = v.y.abs();
                     total +=
                         phase.eval(c.clamp(-1.0, 1.0) as f32, 1.0) as f64 * (-out / mu).exp() / mu;
                 }
@@ -141,22 +127,14 @@ pub(crate) fn slab_radiance(
             let c = sampler.sample_cos(&mut rng);
             let s = (1.0 - c * c).max(0.0).sqrt();
             let phi = 2.0 * std::f64::consts::PI * rng.uniform();
-            let helper = if d[1].abs() < 0.9 {
-                [0.0, 1.0, 0.0]
-            } else {
-                [1.0, 0.0, 0.0]
-            };
-            let t1 = normalize(cross(helper, d));
-            let t2 = cross(d, t1);
-            d = normalize([
-                c * d[0] + s * (phi.cos() * t1[0] + phi.sin() * t2[0]),
-                c * d[1] + s * (phi.cos() * t1[1] + phi.sin() * t2[1]),
-                c * d[2] + s * (phi.cos() * t1[2] + phi.sin() * t2[2]),
-            ]);
+            let helper = if d.y.abs() < 0.9 { DVec3::Y } else { DVec3::X };
+            let t1 = helper.cross(d).normalize();
+            let t2 = d.cross(t1);
+            d = (c * d + s * (phi.cos() * t1 + phi.sin() * t2)).normalize();
         }
     }
     // Photons per unit horizontal area stand for the irradiance on it, 10 mu0.
-    let norm = 10.0 * sun[1] / photons as f64;
+    let norm = 10.0 * sun.y / photons as f64;
     score.iter().map(|s| s * norm).collect()
 }
 
