@@ -189,6 +189,18 @@ impl PathTracer {
         frame: &FrameInputs,
         samples: u32,
     ) -> Result<()> {
+        // The count divides the sums in `read`: one that wrapped would scale the image wrong.
+        let total = self
+            .samples
+            .checked_add(samples)
+            .ok_or_else(|| Error::InvalidTarget {
+                target: "reference",
+                reason: format!(
+                    "{samples} more samples on the {} accumulated exceed {} in all: reset first",
+                    self.samples,
+                    u32::MAX
+                ),
+            })?;
         let uniforms = renderer.march_uniforms(frame)?;
         let (device, queue, noise, weather) = renderer.medium();
         gpu_scope(device, || {
@@ -248,7 +260,7 @@ impl PathTracer {
                 left -= n;
             }
         })?;
-        self.samples += samples;
+        self.samples = total;
         Ok(())
     }
 

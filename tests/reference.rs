@@ -242,8 +242,17 @@ fn bad_sizes_and_early_reads_are_errors() {
             .expect("refused");
         assert!(e.to_string().contains("reference"), "{e}");
     }
-    let pt = PathTracer::new(&r, 4, 4, Orders::All).unwrap();
+    let mut pt = PathTracer::new(&r, 4, 4, Orders::All).unwrap();
     assert!(pt.read(&r).is_err());
+    // A sample count past u32::MAX in all is refused before any work, and the samples
+    // already accumulated stay as they were.
+    let f = below_view(4, 4);
+    pt.accumulate(&r, &f, 2).unwrap();
+    let before = pt.read(&r).unwrap();
+    let e = pt.accumulate(&r, &f, u32::MAX).expect_err("refused");
+    assert!(e.to_string().contains("reset first"), "{e}");
+    assert_eq!(pt.samples(), 2);
+    assert_eq!(pt.read(&r).unwrap(), before);
 }
 
 fn mean_luminance(img: &[[f32; 4]]) -> f64 {
