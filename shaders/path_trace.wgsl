@@ -27,7 +27,8 @@
 struct PathParams {
     size: vec4u,      // image width, height, seed of this dispatch, samples per pixel in it
     mode: vec4u,      // x: 1 = single scattering only, y: order at which roulette starts,
-                      // z: 1 = the branch toward the sun at each collision (guide_lobe)
+                      // z: 1 = the branch toward the sun at each collision (guide_lobe),
+                      // w: the seed's sequence epoch (src/reference.rs, rng_words)
 }
 
 @group(0) @binding(6) var<storage, read_write> accum: array<vec4f>;
@@ -205,7 +206,9 @@ fn trace(@builtin(global_invocation_id) id: vec3u) {
     let albedo = u.shape.w;
     var sum = vec4f(0.0);
     for (var s = 0u; s < pt.size.w; s++) {
-        rng_state = pcg3d(vec3u(id.x, id.y | (s << 16u), pt.size.z)).x;
+        // The hash's words: the pixel's column with the epoch above it (a column is below
+        // 4096), its row with the sample above it, the seed with the dispatch.
+        rng_state = pcg3d(vec3u(id.x | (pt.mode.w << 12u), id.y | (s << 16u), pt.size.z)).x;
         var radiance = vec3f(0.0);
         if (m > 0.0) {
             sum.a += transmittance(cam, view_dir, u.layer.w, m);

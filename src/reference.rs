@@ -45,6 +45,29 @@ pub enum Orders {
 /// The largest image side the path tracer takes.
 pub const MAX_REFERENCE_SIZE: u32 = 4096;
 
+// A pixel's column fills the hash input's low 12 bits; the random sequence's epoch takes the
+// bits above them (`rng_words`).
+const _: () = assert!(MAX_REFERENCE_SIZE <= 1 << 12);
+
+/// Dispatches a seed's sequence counts before its epoch changes (the hash input's third word
+/// holds the seed in its high half and the dispatch in its low half).
+const DISPATCHES_PER_EPOCH: u64 = 1 << 16;
+
+/// Epochs a sequence runs through before it repeats (the 20 bits above a pixel's column).
+const EPOCHS: u64 = 1 << 20;
+
+/// The words that key dispatch `position` of seed `seed`'s sequence in the shader's hash:
+/// (the epoch, put above the pixel's column in the first word; the seed and the dispatch
+/// within the epoch, the third word). Distinct (seed, position) pairs give distinct words for
+/// 2^36 dispatches of every seed: before, the third word alone was `seed << 16` plus the
+/// dispatch, and seed s's sequence ran into seed s + 1's after 65,536 dispatches. Epoch 0 keys
+/// exactly as before, so images traced in it are unchanged.
+fn rng_words(seed: u16, position: u64) -> (u32, u32) {
+    let epoch = ((position / DISPATCHES_PER_EPOCH) % EPOCHS) as u32;
+    let within = (position % DISPATCHES_PER_EPOCH) as u32;
+    (epoch, (seed as u32) << 16 | within)
+}
+
 /// Samples per pixel one dispatch takes at most (the rest is split over several dispatches,
 /// so no single GPU submission runs long enough to trip a driver watchdog).
 const SAMPLES_PER_DISPATCH: u32 = 4;
@@ -62,7 +85,9 @@ pub struct PathTracer {
     size: (u32, u32),
     orders: Orders,
     samples: u32,
-    dispatches: u32,
+    seed: u16,
+    /// Dispatches drawn from the seed's sequence so far (across resets).
+    position: u64,
     sun_guiding: bool,
 }
 
@@ -144,7 +169,8 @@ impl PathTracer {
                 size: (width, height),
                 orders,
                 samples: 0,
-                dispatches: 0,
+                seed: 0,
+                position: 0,
                 sun_guiding: true,
             }
         })
@@ -152,8 +178,25 @@ impl PathTracer {
 
     /// Starts the random sequence at `seed` (tracers with different seeds draw independent
     /// samples; two halves of an estimate tell its Monte-Carlo error).
+    /// The sequence is long enough for 2^38 samples per pixel (2^36 dispatches of up to 4).
     pub fn with_seed(mut self, seed: u16) -> Self {
-        self.dispatches = (seed as u32) << 16;
+        self.seed = seed;
+        self.position = 0;
+        self
+    }
+
+    /// Where the tracer stands in its seed's random sequence (an opaque count that
+    /// [`PathTracer::reset`] keeps, so samples after a reset are independent of those
+    /// before). A host that saves a progressive still can store it with the sums and resume
+    /// with [`PathTracer::with_sequence_position`], drawing new samples, not the same again.
+    pub fn sequence_position(&self) -> u64 {
+        self.position
+    }
+
+    /// Continues the seed's sequence from `position` (from [`PathTracer::sequence_position`]);
+    /// call it after [`PathTracer::with_seed`], which starts the sequence over.
+    pub fn with_sequence_position(mut self, position: u64) -> Self {
+        self.position = position;
         self
     }
 
@@ -234,13 +277,14 @@ impl PathTracer {
             let mut left = samples;
             while left > 0 {
                 let n = left.min(SAMPLES_PER_DISPATCH);
+                let (epoch, key) = rng_words(self.seed, self.position);
                 let params = PathParams {
-                    size: [self.size.0, self.size.1, self.dispatches, n],
+                    size: [self.size.0, self.size.1, key, n],
                     mode: [
                         (self.orders == Orders::SingleOnly) as u32,
                         3,
                         self.sun_guiding as u32,
-                        0,
+                        epoch,
                     ],
                 };
                 // One submit per dispatch: the params buffer is written between them.
@@ -256,7 +300,7 @@ impl PathTracer {
                     pass.dispatch_workgroups(self.size.0.div_ceil(8), self.size.1.div_ceil(8), 1);
                 }
                 queue.submit([enc.finish()]);
-                self.dispatches = self.dispatches.wrapping_add(1);
+                self.position = self.position.wrapping_add(1);
                 left -= n;
             }
         })?;
@@ -290,6 +334,31 @@ impl PathTracer {
 mod tests {
     use super::*;
     use crate::noise_cache::source_hash;
+
+    /// Every seed's sequence keys the hash with words no other (seed, dispatch) pair uses,
+    /// for 2^36 dispatches; within the first epoch it keys as before (traced images unchanged).
+    #[test]
+    fn seeds_key_disjoint_sequences() {
+        for (seed, position) in [(0u16, 0u64), (7, 1), (65535, 65535)] {
+            assert_eq!(
+                rng_words(seed, position),
+                (0, (seed as u32) << 16 | position as u32)
+            );
+        }
+        let positions = [0u64, 1, 65_535, 65_536, 65_537, 1 << 20, (1 << 36) - 1];
+        let mut seen = std::collections::HashSet::new();
+        for seed in [0u16, 1, 2, 65_535] {
+            for position in positions {
+                assert!(
+                    seen.insert(rng_words(seed, position)),
+                    "seed {seed} at {position} repeats another pair's words"
+                );
+                assert!(rng_words(seed, position).0 < EPOCHS as u32);
+            }
+        }
+        // The documented period.
+        assert_eq!(rng_words(5, 1 << 36), rng_words(5, 0));
+    }
 
     /// The id covers what makes the medium, not only the tracer's own file: the density
     /// model and the noise bake are among its modules, and leaving either out changes it.

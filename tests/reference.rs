@@ -255,6 +255,60 @@ fn bad_sizes_and_early_reads_are_errors() {
     assert_eq!(pt.read(&r).unwrap(), before);
 }
 
+/// Seed s, 65,536 dispatches in, used to key the hash exactly as seed s + 1 at its start: two
+/// halves traced that long drew the same samples. And a still resumed at a saved sequence
+/// position draws the samples that come next, not the first ones again.
+#[test]
+fn seeds_draw_disjoint_sequences_and_a_resumed_still_goes_on() {
+    let r = renderer(slab_settings(0.004, 1.0));
+    let (w, h) = (8, 8);
+    let f = below_view(w, h);
+    let image = |seed: u16, position: u64, spp: u32| {
+        let mut pt = PathTracer::new(&r, w, h, Orders::All)
+            .unwrap()
+            .with_seed(seed)
+            .with_sequence_position(position);
+        pt.accumulate(&r, &f, spp).unwrap();
+        // Up to 4 samples per dispatch, one position per dispatch.
+        assert_eq!(pt.sequence_position(), position + spp.div_ceil(4) as u64);
+        pt.read(&r).unwrap()
+    };
+    let differing =
+        |a: &[[f32; 4]], b: &[[f32; 4]]| a.iter().zip(b).filter(|(p, q)| p != q).count();
+    let next_seed = image(3, 0, 4);
+    assert_eq!(
+        image(3, 0, 4),
+        next_seed,
+        "the same seed and position, the same samples"
+    );
+    for (seed, position) in [(2, 1u64 << 16), (1, 2 << 16), (3, 1 << 16)] {
+        let n = differing(&image(seed, position, 4), &next_seed);
+        assert!(
+            n >= 60,
+            "seed {seed} at {position}: only {n} of 64 pixels differ"
+        );
+    }
+    // Resuming: 4 samples from the start and 4 from position 1 are the 8 from the start.
+    let whole = image(9, 0, 8);
+    let (first, second) = (image(9, 0, 4), image(9, 1, 4));
+    for ((a, b), c) in first.iter().zip(&second).zip(&whole) {
+        for k in 0..4 {
+            let halves = 0.5 * (a[k] + b[k]);
+            assert!(
+                (halves - c[k]).abs() <= 1e-5 * c[k].abs().max(1e-3),
+                "{halves} vs {}",
+                c[k]
+            );
+        }
+    }
+    // A reset keeps the position: the samples after it are new ones.
+    let mut pt = PathTracer::new(&r, w, h, Orders::All).unwrap().with_seed(9);
+    pt.accumulate(&r, &f, 4).unwrap();
+    pt.reset();
+    pt.accumulate(&r, &f, 4).unwrap();
+    assert_eq!(pt.read(&r).unwrap(), second);
+}
+
 fn mean_luminance(img: &[[f32; 4]]) -> f64 {
     img.iter()
         .map(|p| (0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2]) as f64)
