@@ -20,10 +20,16 @@
 //! [--noise-spp N] [--overcast-spp N] [--closeup-spp N] [--only slab|above|sphere|noise]
 //! [--view sparse_ground|overcast_ground|sparse_above|sparse_closeup]
 //! [--quality LEVEL] [--pictures DIR] [--bands]
-//! [--dump DIR] [--by-transmittance] [--single] [--no-ambient] [--fresh]` (software
-//! Vulkan: minutes to an hour, by the sample counts). Path-traced images are cached under
-//! target/fidelity-cache, or the folder NIMBUS_FIDELITY_CACHE names (keyed by medium, view,
-//! sample count and the path tracer's and medium's shader sources); `--fresh` traces anew. `--bands` prints the march's and the
+//! [--dump DIR] [--by-transmittance] [--single] [--no-ambient] [--fresh] [--keep]` (software
+//! Vulkan: minutes to hours, by the sample counts). Path-traced images are cached under
+//! target/fidelity-cache, or the folder NIMBUS_FIDELITY_CACHE names, and read from the
+//! committed store docs/fidelity/references too (keyed by medium, view, sample count, seed and
+//! the path tracer's and medium's shader sources: the debug media's key leaves out the
+//! clouds' density model); `--fresh` traces anew; `--keep` puts what a run uses into the store
+//! (and `--write --keep` drops the store's chunks the table no longer reads). On a lent GPU
+//! (minutes instead of hours): run the same command with `--keep` there and bring the store
+//! back as one archive (`tar -cf $OUT/references.tar docs/fidelity/references`), then unpack it
+//! here and rerun. `--bands` prints the march's and the
 //! reference's means in strips across each sphere and noise view; `--dump DIR` writes their
 //! float images (march, path traced, and its two halves) for analysis; `--by-transmittance`
 //! compares the means in bands of the reference's transmittance; `--single` compares single
@@ -209,8 +215,8 @@ fn both(
     })
 }
 
-/// One chunk of path-traced samples (`spp / 2` of them, seeded `seed`), from the cache when
-/// it holds it.
+/// One chunk of path-traced samples (`spp / 2` of them, seeded `seed`), from the cache or the
+/// committed store when either holds it.
 fn chunk(
     h: &Headless,
     settings: &Settings,
@@ -221,9 +227,14 @@ fn chunk(
     single: bool,
 ) -> Result<Image, String> {
     let e = |e: nimbus::Error| e.to_string();
-    let cache = reference_cache(settings, f, size, spp, seed);
-    if let Some(img) = cache.as_ref().and_then(|p| read_cached(p, size)) {
-        return Ok(img);
+    let name = reference_name(settings, f, size, spp, seed);
+    // `--fresh` traces anew (and overwrites what the cache and the store held).
+    let fresh = std::env::args().any(|a| a == "--fresh");
+    for dir in [cache_dir(), store_dir()].iter().filter(|_| !fresh) {
+        if let Some(img) = read_cached(&dir.join(&name), size) {
+            store::used(&name, settings, f, size, spp, seed);
+            return Ok(img);
+        }
     }
     let orders = if single {
         Orders::SingleOnly
@@ -235,10 +246,16 @@ fn chunk(
         .with_seed(seed);
     pt.accumulate(h.renderer(), f, spp.div_ceil(2)).map_err(e)?;
     let img = pt.read(h.renderer()).map_err(e)?;
-    if let Some(p) = cache {
-        let bytes: Vec<u8> = img.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
-        let _ = std::fs::write(p, bytes);
+    let bytes: Vec<u8> = img.iter().flatten().flat_map(|v| v.to_le_bytes()).collect();
+    if std::fs::create_dir_all(cache_dir()).is_ok() {
+        let _ = std::fs::write(cache_dir().join(&name), &bytes);
     }
+    if store::keeping() {
+        let write = std::fs::create_dir_all(store_dir())
+            .and_then(|()| std::fs::write(store_dir().join(&name), &bytes));
+        write.map_err(|e| format!("the store {}: {e}", store_dir().display()))?;
+    }
+    store::used(&name, settings, f, size, spp, seed);
     Ok(img)
 }
 
@@ -273,20 +290,17 @@ struct Views {
     b: Image,
 }
 
-/// Where a path-traced image of this medium and view is cached (target/fidelity-cache), so
-/// that work on the march reruns only the march. The key leaves out what the path tracer does
-/// not read (the march's budget and multiple-scattering model); `--fresh` ignores the cache.
-fn reference_cache(
+/// The file name a path-traced chunk of this medium and view is kept under, in the cache
+/// (target/fidelity-cache) and the committed store (docs/fidelity/references), so that work on
+/// the march reruns only the march. The key leaves out what the path tracer does not read (the
+/// march's budget and multiple-scattering model).
+fn reference_name(
     settings: &Settings,
     f: &FrameInputs,
     size: (u32, u32),
     spp: u32,
     seed: u16,
-) -> Option<std::path::PathBuf> {
-    use std::hash::{Hash, Hasher};
-    if std::env::args().any(|a| a == "--fresh") {
-        return None;
-    }
+) -> String {
     let mut key = settings.clone();
     key.lighting.multiple_scattering = Default::default();
     // The march's budget and the light march's are the march's alone (the path tracer tracks
@@ -303,18 +317,151 @@ fn reference_cache(
     key.lighting.light_distance = 3_000.0;
     // How a weather map is spread over frames changes no texel of it.
     key.weather_map_texels_per_frame = 32_768;
-    let mut hasher = std::collections::hash_map::DefaultHasher::new();
     let orders = if single_only() { "|single" } else { "" };
-    format!("{key:?}|{f:?}|{size:?}|{spp}|{seed}{orders}").hash(&mut hasher);
-    // A changed path tracer, medium, density model or noise bake traces anew.
-    PathTracer::source_id().hash(&mut hasher);
-    // NIMBUS_FIDELITY_CACHE moves the cache, e.g. to trace high sample counts on another
-    // machine with a GPU and bring the files back (the key holds no path).
-    let dir = std::env::var_os("NIMBUS_FIDELITY_CACHE")
+    // A changed path tracer, medium, density model or noise bake traces anew; the debug media
+    // do not read the density model or the bakes, so work on the clouds keeps their chunks.
+    let source = match settings.debug_density {
+        DebugDensity::Off => PathTracer::source_id(),
+        _ => PathTracer::debug_media_source_id(),
+    };
+    let text = format!("{key:?}|{f:?}|{size:?}|{spp}|{seed}{orders}|{source:08x}");
+    format!("{:016x}.bin", fnv1a64(text.as_bytes()))
+}
+
+/// FNV-1a, 64 bits: a key that stays the same across Rust releases (std's `DefaultHasher`
+/// promises no such thing, and the store's names are committed).
+fn fnv1a64(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// Where traced chunks are cached on this machine: target/fidelity-cache, or the folder
+/// NIMBUS_FIDELITY_CACHE names (e.g. to trace high sample counts on another machine with a GPU
+/// and bring the files back: the key holds no path).
+fn cache_dir() -> std::path::PathBuf {
+    std::env::var_os("NIMBUS_FIDELITY_CACHE")
         .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("target/fidelity-cache"));
-    std::fs::create_dir_all(&dir).ok()?;
-    Some(dir.join(format!("{:016x}.bin", hasher.finish())))
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("target/fidelity-cache"))
+}
+
+/// The committed store of traced chunks: a fresh clone (or a machine without a GPU, where the
+/// references take hours) reruns the table from them in minutes.
+fn store_dir() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/fidelity/references")
+}
+
+/// The store's bookkeeping: `--keep` writes every chunk a run traces into the store too, and
+/// rewrites its manifest (docs/fidelity/references/MANIFEST.tsv: one line per chunk, what it
+/// is a trace of); a `--keep` run of the whole table also drops the chunks it did not use
+/// (those of an older path tracer or of views the table no longer has).
+mod store {
+    use super::*;
+    use std::collections::BTreeMap;
+    use std::sync::Mutex;
+
+    /// The chunks this run read or traced: file name -> manifest line.
+    static USED: Mutex<BTreeMap<String, String>> = Mutex::new(BTreeMap::new());
+
+    pub(super) fn keeping() -> bool {
+        std::env::args().any(|a| a == "--keep")
+    }
+
+    pub(super) fn used(
+        name: &str,
+        settings: &Settings,
+        f: &FrameInputs,
+        size: (u32, u32),
+        spp: u32,
+        seed: u16,
+    ) {
+        let medium = match settings.debug_density {
+            DebugDensity::Off => "noise model".to_string(),
+            DebugDensity::Slab { .. } => "slab".to_string(),
+            DebugDensity::Sphere { .. } => "sphere".to_string(),
+        };
+        let eye = f.camera.view.inverse().w_axis.truncate();
+        let sun = f.sun.direction;
+        let line = format!(
+            "{name}\t{medium}, σt {:.4} /m, {:?}\teye {:.0} {:.0} {:.0}, sun {:.3} {:.3} {:.3}\t\
+             {}x{}\t{} samples\tseed {seed}",
+            settings.weather.clouds.extinction,
+            settings.lighting.phase,
+            eye.x,
+            eye.y,
+            eye.z,
+            sun.x,
+            sun.y,
+            sun.z,
+            size.0,
+            size.1,
+            spp.div_ceil(2),
+        );
+        if let Ok(mut used) = USED.lock() {
+            used.insert(name.to_string(), line);
+        }
+    }
+
+    /// With `--keep`: copies the chunks this run read from the cache into the store, rewrites
+    /// the manifest, and on a run of the whole table (`whole`) removes the store's other
+    /// chunks. Returns what it did, for the run's output.
+    pub(super) fn finish(whole: bool) -> Result<Option<String>, String> {
+        if !keeping() {
+            return Ok(None);
+        }
+        let dir = store_dir();
+        std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+        let used = USED.lock().map_err(|e| e.to_string())?.clone();
+        let mut copied = 0;
+        for name in used.keys() {
+            let stored = dir.join(name);
+            if !stored.exists() {
+                std::fs::copy(cache_dir().join(name), &stored).map_err(|e| e.to_string())?;
+                copied += 1;
+            }
+        }
+        let manifest = dir.join("MANIFEST.tsv");
+        let mut lines: BTreeMap<String, String> = BTreeMap::new();
+        if !whole {
+            // A partial run keeps the lines of the chunks it did not touch.
+            for line in std::fs::read_to_string(&manifest)
+                .unwrap_or_default()
+                .lines()
+            {
+                if let Some((name, _)) = line.split_once('\t') {
+                    if dir.join(name).exists() {
+                        lines.insert(name.to_string(), line.to_string());
+                    }
+                }
+            }
+        }
+        lines.extend(used.clone());
+        let mut removed = 0;
+        if whole {
+            for entry in std::fs::read_dir(&dir).map_err(|e| e.to_string())? {
+                let name = entry.map_err(|e| e.to_string())?.file_name();
+                let name = name.to_string_lossy();
+                if name.ends_with(".bin") && !used.contains_key(name.as_ref()) {
+                    std::fs::remove_file(dir.join(name.as_ref())).map_err(|e| e.to_string())?;
+                    removed += 1;
+                }
+            }
+        }
+        let mut text = String::from(
+            "# file\tmedium\tview\tsize\tsamples per pixel\tseed (written by \
+             examples-rust/fidelity.rs --keep; little-endian f32 rgba per pixel, rows from the top)\n",
+        );
+        for line in lines.values() {
+            text.push_str(line);
+            text.push('\n');
+        }
+        std::fs::write(&manifest, text).map_err(|e| e.to_string())?;
+        Ok(Some(format!(
+            "store {}: {} chunks ({copied} added, {removed} removed)",
+            dir.display(),
+            lines.len()
+        )))
+    }
 }
 
 fn read_cached(path: &Path, size: (u32, u32)) -> Option<Image> {
@@ -1021,13 +1168,14 @@ fn main() -> Result<(), String> {
     }
 
     if write {
+        let keep = if store::keeping() { " --keep" } else { "" };
         let mut md = String::new();
         let _ = writeln!(
             md,
             "# Fidelity: the march against the path-traced reference\n\n\
              Generated by `cargo run --release --example fidelity -- --write --spp {spp}\n\
              --sphere-spp {sphere_spp} --noise-spp {noise_spp} --overcast-spp {overcast_spp}\n\
-             --closeup-spp {closeup_spp}` on\n\
+             --closeup-spp {closeup_spp}{keep}` on\n\
              software Vulkan ({W}×{H} slab views, {}×{} sphere, {}×{} noise views, {}×{} close-up;\n\
              the march at the default level on the\n\
              full-resolution trace grid (compared pixel for pixel; the default level's half grid\n\
@@ -1045,7 +1193,10 @@ fn main() -> Result<(), String> {
              relative spread between two independent halves of the path-traced samples (the\n\
              worst view for slabs). Limb contrast (spheres): the mean luminance of the disc's\n\
              outer half toward the sun over that of its outer half away from it, march and path\n\
-             traced, and their ratio.\n\n\
+             traced, and their ratio. The path-traced chunks are looked up in the committed store\n\
+             docs/fidelity/references (its MANIFEST.tsv says what each chunk is a trace of) before\n\
+             they are traced, and `--keep` adds the ones a run traces: with the whole table's\n\
+             chunks there, a run retraces nothing and takes minutes (the march alone).\n\n\
              | scene | march / path traced | with the octaves | reference noise | FLIP | FLIP floor | limb contrast |\n\
              | --- | --- | --- | --- | --- | --- | --- |",
             W * 2,
@@ -1531,6 +1682,11 @@ fn main() -> Result<(), String> {
         std::fs::write(&path, md).map_err(|e| e.to_string())?;
         println!("wrote {}", path.display());
     }
+    // Only a --write run is known to have read every chunk of the table (it refuses the flags
+    // that trace other ones), so only it prunes the store.
+    if let Some(done) = store::finish(write)? {
+        println!("{done}");
+    }
     Ok(())
 }
 
@@ -1550,6 +1706,47 @@ mod tests {
             views,
             from_above: false,
         }
+    }
+
+    /// The committed store and its manifest agree: every chunk listed is there at the size
+    /// its line gives (16 bytes a pixel), and nothing is there unlisted.
+    #[test]
+    fn the_store_holds_what_its_manifest_lists() {
+        let dir = store_dir();
+        let files: std::collections::BTreeSet<String> = std::fs::read_dir(&dir)
+            .map(|entries| {
+                entries
+                    .filter_map(|e| e.ok()?.file_name().into_string().ok())
+                    .filter(|n| n.ends_with(".bin"))
+                    .collect()
+            })
+            .unwrap_or_default();
+        let manifest = std::fs::read_to_string(dir.join("MANIFEST.tsv")).unwrap_or_default();
+        let mut listed = std::collections::BTreeSet::new();
+        for line in manifest.lines().filter(|l| !l.starts_with('#')) {
+            let fields: Vec<&str> = line.split('\t').collect();
+            assert_eq!(fields.len(), 6, "{line}");
+            let (w, h) = fields[3].split_once('x').expect("a size");
+            let bytes = w.parse::<u64>().unwrap() * h.parse::<u64>().unwrap() * 16;
+            let len = std::fs::metadata(dir.join(fields[0])).map(|m| m.len());
+            assert_eq!(len.ok(), Some(bytes), "{}", fields[0]);
+            assert!(listed.insert(fields[0].to_string()), "{} twice", fields[0]);
+        }
+        let unlisted: Vec<&String> = files.difference(&listed).collect();
+        assert!(
+            unlisted.is_empty(),
+            "{} chunks in the store that its manifest does not list, e.g. {:?} (rerun with --keep)",
+            unlisted.len(),
+            unlisted.first()
+        );
+    }
+
+    #[test]
+    fn the_store_key_is_fnv1a_64() {
+        // The published test vectors (Fowler, Noll, Vo): the committed names depend on them.
+        assert_eq!(fnv1a64(b""), 0xcbf2_9ce4_8422_2325);
+        assert_eq!(fnv1a64(b"a"), 0xaf63_dc4c_8601_ec8c);
+        assert_eq!(fnv1a64(b"foobar"), 0x8594_4171_f739_67e8);
     }
 
     #[test]

@@ -105,6 +105,20 @@ impl PathTracer {
         crate::noise_cache::source_hash(&modules)
     }
 
+    /// An id of the sources an image of a debug medium (`DebugDensity::Slab` or `Sphere`)
+    /// depends on: the path tracer's pass without the clouds' density model, which those media
+    /// do not read (medium.wgsl returns their density before it), and without the noise and
+    /// weather bakes. A cache of debug-medium references keyed by it survives work on the
+    /// clouds' shapes; one of noise-model references needs [`PathTracer::source_id`].
+    pub fn debug_media_source_id() -> u32 {
+        let modules: Vec<(&str, &str)> = crate::gpu::shaders::pass_modules("path_trace")
+            .iter()
+            .copied()
+            .filter(|(name, _)| *name != "density.wgsl")
+            .collect();
+        crate::noise_cache::source_hash(&modules)
+    }
+
     /// A path tracer for `width` × `height` images on `renderer`'s device, counting `orders`.
     pub fn new(renderer: &Renderer, width: u32, height: u32, orders: Orders) -> Result<Self> {
         if width == 0 || height == 0 || width > MAX_REFERENCE_SIZE || height > MAX_REFERENCE_SIZE {
@@ -370,5 +384,15 @@ mod tests {
         assert!(tracer.iter().any(|(name, _)| *name == "density.wgsl"));
         assert_ne!(id, source_hash(tracer), "the bakes count");
         assert_ne!(id, crate::noise_cache::BAKE_ID, "the tracer counts");
+        // The debug media's id leaves out only the density model.
+        let debug = PathTracer::debug_media_source_id();
+        assert_ne!(debug, id);
+        let without: Vec<(&str, &str)> = tracer
+            .iter()
+            .copied()
+            .filter(|(name, _)| *name != "density.wgsl")
+            .collect();
+        assert_eq!(without.len() + 1, tracer.len());
+        assert_eq!(debug, source_hash(&without));
     }
 }
