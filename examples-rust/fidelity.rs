@@ -346,7 +346,7 @@ fn cache_dir() -> std::path::PathBuf {
 }
 
 /// The committed store of traced chunks: a fresh clone (or a machine without a GPU, where the
-/// references take hours) reruns the table from them in minutes.
+/// references take hours) reruns the table from them, the march alone.
 fn store_dir() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/fidelity/references")
 }
@@ -1196,7 +1196,8 @@ fn main() -> Result<(), String> {
              traced, and their ratio. The path-traced chunks are looked up in the committed store\n\
              docs/fidelity/references (its MANIFEST.tsv says what each chunk is a trace of) before\n\
              they are traced, and `--keep` adds the ones a run traces: with the whole table's\n\
-             chunks there, a run retraces nothing and takes minutes (the march alone).\n\n\
+             chunks there, a run retraces nothing (the march alone: about a minute per slab row\n\
+             on llvmpipe, mostly each view's noise bake, against hours of tracing).\n\n\
              | scene | march / path traced | with the octaves | reference noise | FLIP | FLIP floor | limb contrast |\n\
              | --- | --- | --- | --- | --- | --- | --- |",
             W * 2,
