@@ -376,9 +376,9 @@ mod store {
         seed: u16,
     ) {
         let medium = match settings.debug_density {
-            DebugDensity::Off => "noise model".to_string(),
-            DebugDensity::Slab { .. } => "slab".to_string(),
-            DebugDensity::Sphere { .. } => "sphere".to_string(),
+            DebugDensity::Off => "noise model",
+            DebugDensity::Slab { .. } => "slab",
+            DebugDensity::Sphere { .. } => "sphere",
         };
         let eye = f.camera.view.inverse().w_axis.truncate();
         let sun = f.sun.direction;
