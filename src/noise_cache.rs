@@ -37,21 +37,67 @@ const FORMAT_VERSION: u32 = 1;
 /// Bytes before the payload.
 pub const HEADER_BYTES: usize = 48;
 
-/// FNV-1a (32 bit) over the bake shaders' source text: any change to the noise algorithm
-/// (or even its comments, which is merely conservative) makes older caches unusable. The
-/// modules are the bake pass's own list (`NOISE_BAKE_MODULES`, which `PASSES` uses), so a
-/// module added to the pass is hashed too.
+/// FNV-1a (32 bit) over the tokens of the shaders' source text: any change to the code changes
+/// it, and an edit of a comment or of the layout does not. Comments (`//` to the end of the
+/// line, and `/* */`, nested as WGSL nests them) count as whitespace, every run of whitespace
+/// as one space (WGSL has no string literals, so no token holds either), and each module ends
+/// in a zero byte, so that text moved from one module to the next changes the id too. Used for
+/// the noise cache's bake id (an older cache is refused, so a new id costs hosts one rebake) and
+/// the path tracer's source ids (a changed id retires traced references), where a comment
+/// edit should cost neither. The modules are the pass's own list (`NOISE_BAKE_MODULES`, which
+/// `PASSES` uses), so a module added to the pass is hashed too.
 pub(crate) const fn source_hash(modules: &[(&str, &str)]) -> u32 {
+    const fn mix(h: u32, byte: u8) -> u32 {
+        (h ^ byte as u32).wrapping_mul(0x0100_0193)
+    }
+    // Whether the text at i starts with the two bytes a, b.
+    const fn starts(bytes: &[u8], i: usize, a: u8, b: u8) -> bool {
+        i + 1 < bytes.len() && bytes[i] == a && bytes[i + 1] == b
+    }
     let mut h: u32 = 0x811c_9dc5;
     let mut p = 0;
     while p < modules.len() {
         let bytes = modules[p].1.as_bytes();
         let mut i = 0;
+        // A separator (whitespace or a comment) since the last token byte, and whether the
+        // module has had a token yet (leading and trailing whitespace count for nothing).
+        let mut separated = false;
+        let mut started = false;
         while i < bytes.len() {
-            h ^= bytes[i] as u32;
-            h = h.wrapping_mul(0x0100_0193);
-            i += 1;
+            if starts(bytes, i, b'/', b'/') {
+                while i < bytes.len() && bytes[i] != b'\n' {
+                    i += 1;
+                }
+                separated = true;
+            } else if starts(bytes, i, b'/', b'*') {
+                let mut depth = 1;
+                i += 2;
+                while i < bytes.len() && depth > 0 {
+                    if starts(bytes, i, b'/', b'*') {
+                        depth += 1;
+                        i += 2;
+                    } else if starts(bytes, i, b'*', b'/') {
+                        depth -= 1;
+                        i += 2;
+                    } else {
+                        i += 1;
+                    }
+                }
+                separated = true;
+            } else if bytes[i].is_ascii_whitespace() {
+                separated = true;
+                i += 1;
+            } else {
+                if separated && started {
+                    h = mix(h, b' ');
+                }
+                h = mix(h, bytes[i]);
+                started = true;
+                separated = false;
+                i += 1;
+            }
         }
+        h = mix(h, 0);
         p += 1;
     }
     h
@@ -328,12 +374,47 @@ mod tests {
         let pass = crate::gpu::shaders::pass_modules("noise_bake");
         assert_eq!(BAKE_ID, source_hash(pass));
         let mut changed: Vec<(&str, &str)> = pass.to_vec();
-        let edited = format!("{} ", changed[1].1);
+        let edited = format!("{} const edited = 1.0;", changed[1].1);
         changed[1].1 = &edited;
         assert_ne!(BAKE_ID, source_hash(&changed));
+        // A comment added to a module keeps the id.
+        let commented = format!("// a note\n{}\n/* another */", changed[0].1);
+        changed = pass.to_vec();
+        changed[0].1 = &commented;
+        assert_eq!(BAKE_ID, source_hash(&changed));
         let mut bytes = sample();
         bytes[12..16].copy_from_slice(&(BAKE_ID ^ 1).to_le_bytes());
         let e = NoiseCacheInfo::parse(&bytes).unwrap_err().to_string();
         assert!(e.contains("another noise algorithm"), "{e}");
+    }
+
+    #[test]
+    fn source_hash_reads_tokens_not_comments_or_layout() {
+        let id = |text: &str| source_hash(&[("m.wgsl", text)]);
+        let code = "fn f(x: f32) -> f32 {\n    return x * 2.0;\n}\n";
+        // Comments of both kinds (nested too), indentation, blank lines and line ends: the same.
+        for same in [
+            "// why f doubles\nfn f(x: f32) -> f32 {\n    return x * 2.0; // twice\n}\n",
+            "fn f(x: f32) -> f32 { return x * 2.0; }",
+            "\n\n  fn f(x: f32)\t-> f32 {\r\n\r\n return x * 2.0;\n}",
+            "fn f(x: f32) -> f32 {\n    return x /* a /* nested */ note */ * 2.0;\n}\n",
+            "fn f(x: f32) -> f32 {\n    return x * 2.0;\n}\n/* unterminated at the end",
+            // A comment parts two tokens as whitespace does.
+            "fn f(x: f32) -> f32 {\n    return/**/x * 2.0;\n}\n",
+        ] {
+            assert_eq!(id(code), id(same), "{same:?}");
+        }
+        // Code: a changed token, tokens run together, a division (no comment).
+        for other in [
+            "fn f(x: f32) -> f32 {\n    return x * 3.0;\n}\n",
+            "fn f(x: f32) -> f32 {\n    returnx * 2.0;\n}\n",
+            "fn f(x: f32) -> f32 {\n    return x / 2.0;\n}\n",
+        ] {
+            assert_ne!(id(code), id(other), "{other:?}");
+        }
+        // Text moved across a module boundary is a change, and so is a module's order.
+        let pair = |a: &'static str, b: &'static str| source_hash(&[("a", a), ("b", b)]);
+        assert_ne!(pair("x=1;", "y=2;"), pair("x=1;y", "=2;"));
+        assert_ne!(pair("x=1;", "y=2;"), pair("y=2;", "x=1;"));
     }
 }

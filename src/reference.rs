@@ -92,10 +92,11 @@ pub struct PathTracer {
 }
 
 impl PathTracer {
-    /// An id of the shader sources a traced image depends on: the path tracer's pass (medium,
+    /// An id of the shader code a traced image depends on: the path tracer's pass (medium,
     /// density model, phases) and the noise and weather bakes that make the medium. The same
     /// id, settings, view, sample count and seed trace the same image, so a host (or the
-    /// fidelity benchmark) can key a cache of references by it.
+    /// fidelity benchmark) can key a cache of references by it. It hashes the code's tokens:
+    /// an edit of the shaders' comments or layout keeps it.
     pub fn source_id() -> u32 {
         use crate::gpu::shaders::pass_modules;
         let modules: Vec<(&str, &str)> = ["path_trace", "noise_bake", "weather_bake"]
