@@ -86,9 +86,11 @@ fn profiled_base_density(h: f32, base: vec4f, coverage: vec3f, profiles: vec3f, 
 }
 
 // Detail erosion: wispy at the bottom, billowy higher up; returns density before extinction.
-fn eroded_density(h: f32, base: f32, detail: vec3f, coverage: f32, strength: f32, density: f32) -> f32 {
+// `sharpness` (>= 1) steepens the eroded ramp into the body, capped at full density
+// (profile::eroded_density): the outline stays where it is, the edge crisps.
+fn eroded_density(h: f32, base: f32, detail: vec3f, coverage: f32, strength: f32, sharpness: f32, density: f32) -> f32 {
     let high_freq_fbm = detail.r * 0.625 + detail.g * 0.25 + detail.b * 0.125;
     var d = high_freq_fbm + (1.0 - 2.0 * high_freq_fbm) * clamp(h * 5.0, 0.0, 1.0);
     d *= strength * exp(-coverage * 0.75);
-    return clamp(remap(base, d, 1.0, 0.0, 1.0), 0.0, 1.0) * density;
+    return clamp(sharpness * remap(base, d, 1.0, 0.0, 1.0), 0.0, 1.0) * density;
 }

@@ -12,7 +12,7 @@ struct MarchUniforms {
     shape: vec4f,           // coverage, density, extinction (1/m), albedo
     scales: vec4f,          // 1/base scale, 1/detail scale, 1/weather extent, detail strength
     wind: vec4f,            // weather-map offset (m, tangent x/z), base-noise offset (m)
-    wind_detail: vec4f,     // detail-noise offset (m, tangent x/z), unused, unused
+    wind_detail: vec4f,     // detail-noise offset (m, tangent x/z), edge sharpness, unused
     phase: vec4f,           // phase parameters (see phase.wgsl)
     ms: vec4f,              // octaves, attenuation a, contribution b, eccentricity c
     ambient_top: vec4f,     // rgb, w: light-march distance (m)
@@ -139,7 +139,7 @@ fn sample_density(p: vec3f, cheap: bool, footprint: f32) -> f32 {
     }
     let qd = vec3f(sheared.x + u.wind_detail.x, h, sheared.y + u.wind_detail.y);
     let detail = textureSampleLevel(detail_tex, noise_sampler, qd * u.scales.y, lod_for(footprint, detail_texel)).rgb;
-    return eroded_density(hf, b, detail, u.shape.x, u.scales.w, u.shape.y);
+    return eroded_density(hf, b, detail, u.shape.x, u.scales.w, u.wind_detail.z, u.shape.y);
 }
 
 // Where a ray from p toward the sun leaves the medium (m).

@@ -304,6 +304,7 @@ impl CloudQuery {
             [detail[0], detail[1], detail[2]],
             w.clouds.coverage,
             w.clouds.detail_strength,
+            w.clouds.edge_sharpness,
             w.clouds.density,
         )
     }

@@ -156,7 +156,7 @@ impl MarchUniforms {
                 w.clouds.detail_strength,
             ],
             wind: [weather_off[0], weather_off[1], base_off[0], base_off[1]],
-            wind_detail: [detail_off[0], detail_off[1], 0.0, 0.0],
+            wind_detail: [detail_off[0], detail_off[1], w.clouds.edge_sharpness, 0.0],
             phase: phase_params,
             ms: {
                 let m = &s.lighting.multiple_scattering;

@@ -40,6 +40,12 @@ pub struct CloudShape {
     /// Fraction of the shell over which density fades in at the bottom and out at the top,
     /// in [0, 0.5].
     pub layer_softness: f32,
+    /// How steeply density rises from a cloud's eroded edge into its body, in [1, 8]: the
+    /// eroded density is multiplied by it and capped at full density. 1 keeps the erosion's
+    /// own ramp (soft, cotton-like outlines); 4 makes the ramp a quarter as wide, so the detail
+    /// noise carves crisp billows into a body of nearly uniform density. The outline (where
+    /// density is 0) does not move.
+    pub edge_sharpness: f32,
 }
 
 /// One cloud layer of the weather map (a channel: R, G or B).
@@ -157,6 +163,7 @@ impl Default for CloudShape {
             // (profile.rs, `CARVED_RANGE`), so 0.35 left only shallow bumps.
             detail_strength: 0.7,
             layer_softness: 0.1,
+            edge_sharpness: 1.0,
         }
     }
 }
@@ -378,6 +385,7 @@ impl Weather {
                 albedo: 0.995,
                 detail_strength: 0.4,
                 layer_softness: 0.06,
+                ..CloudShape::default()
             },
             map: WeatherMap {
                 seed: 41,
@@ -436,6 +444,7 @@ impl Weather {
         in_range("clouds.albedo", c.albedo, 0.0, 1.0)?;
         in_range("clouds.detail_strength", c.detail_strength, 0.0, 1.0)?;
         in_range("clouds.layer_softness", c.layer_softness, 0.0, 0.5)?;
+        in_range("clouds.edge_sharpness", c.edge_sharpness, 1.0, 8.0)?;
         if self.map.layers.is_empty() || self.map.layers.len() > 3 {
             return Err(invalid(
                 "map.layers",
@@ -527,6 +536,7 @@ impl Weather {
                 albedo: f(a.clouds.albedo, b.clouds.albedo),
                 detail_strength: f(a.clouds.detail_strength, b.clouds.detail_strength),
                 layer_softness: f(a.clouds.layer_softness, b.clouds.layer_softness),
+                edge_sharpness: f(a.clouds.edge_sharpness, b.clouds.edge_sharpness),
             },
             map: WeatherMap {
                 seed: pick(t, a.map.seed, b.map.seed),
@@ -859,6 +869,14 @@ mod tests {
             (line, field.as_deref()),
             (Some(5), Some("map.layers[1].cloud_type"))
         );
+        for bad in ["0.5", "9.0", "nan"] {
+            let (line, field, msg) = file_error(&format!("[clouds]\nedge_sharpness = {bad}\n"));
+            assert_eq!(
+                (line, field.as_deref()),
+                (Some(2), Some("clouds.edge_sharpness")),
+                "{bad}: {msg}"
+            );
+        }
         let (_, field, msg) =
             file_error("[layer]\nbottom_altitude = 5000.0\ntop_altitude = 1000.0\n");
         assert_eq!(field.as_deref(), Some("layer.bottom_altitude"), "{msg}");

@@ -212,6 +212,7 @@ pub fn density(h: f32, s: &NoiseSample, shape: &CloudShape) -> f32 {
         s.detail,
         shape.coverage,
         shape.detail_strength,
+        shape.edge_sharpness,
         shape.density,
     )
 }
@@ -219,19 +220,27 @@ pub fn density(h: f32, s: &NoiseSample, shape: &CloudShape) -> f32 {
 /// density.wgsl's `eroded_density`: the base shape `base` eroded by a detail-volume texel,
 /// wispy (fBM) at the bottom and billowy (inverted fBM) from a fifth of the way up, times the
 /// global `density`; `coverage` is the global coverage (less erosion under more cloud).
+///
+/// `sharpness` ([`CloudShape::edge_sharpness`], >= 1) multiplies the eroded ramp before it is
+/// capped at 1: where the erosion leaves any cloud (base above the erosion) there still is
+/// cloud, and nowhere else, but the density reaches full `sharpness` times closer to the edge.
+/// The remapped base rises over the whole of a cloud's body, so unsharpened the body is a soft
+/// gradient whose edge the detail can only dent (cotton); sharpened, the body is nearly uniform
+/// and the detail's cells carve its edge (the cauliflower billows of Schneider 2015's images).
 pub fn eroded_density(
     h: f32,
     base: f32,
     detail: [f32; 3],
     coverage: f32,
     strength: f32,
+    sharpness: f32,
     density: f32,
 ) -> f32 {
     let [r, g, b] = detail;
     let high_freq_fbm = r * 0.625 + g * 0.25 + b * 0.125;
     let mut erosion = high_freq_fbm + (1.0 - 2.0 * high_freq_fbm) * saturate(h * 5.0);
     erosion *= strength * (-coverage * 0.75).exp();
-    saturate(remap(base, erosion, 1.0, 0.0, 1.0)) * density
+    saturate(sharpness * remap(base, erosion, 1.0, 0.0, 1.0)) * density
 }
 
 #[cfg(test)]
@@ -450,5 +459,65 @@ mod tests {
             let s = sample(1.0, 1.0);
             assert!(density(h, &s, &shape) <= base_density(h, &s, &shape) * shape.density + 1e-6);
         }
+    }
+
+    /// Edge sharpness steepens the ramp from the eroded edge into the body and caps it at full
+    /// density: cloud stays exactly where it was (same zero set), nowhere thinner, never above
+    /// the density scale, and where the soft ramp is below 1 / k exactly k times as dense.
+    #[test]
+    fn edge_sharpness_crisps_the_edge_without_moving_it() {
+        let mut rnd = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            rnd ^= rnd << 13;
+            rnd ^= rnd >> 7;
+            rnd ^= rnd << 17;
+            (rnd >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let (mut inside, mut capped) = (0, 0);
+        for _ in 0..5_000 {
+            let h = next();
+            let base = next();
+            let detail = [next(), next(), next()];
+            let (coverage, strength, density) = (next(), next(), 0.5 + next());
+            let soft = eroded_density(h, base, detail, coverage, strength, 1.0, density);
+            let mut last = soft;
+            for k in [1.5f32, 4.0, 8.0] {
+                let sharp = eroded_density(h, base, detail, coverage, strength, k, density);
+                assert_eq!(sharp > 0.0, soft > 0.0, "the outline moved (k {k}, h {h})");
+                assert!(
+                    sharp >= last && sharp <= density,
+                    "k {k}: {sharp} after {last}"
+                );
+                let expected = (k * soft / density).min(1.0) * density;
+                assert!(
+                    (sharp - expected).abs() <= 1e-5 * density,
+                    "k {k}: {sharp} against {expected}"
+                );
+                last = sharp;
+            }
+            inside += (soft > 0.0) as u32;
+            capped += (last == density && soft < 0.5 * density) as u32;
+        }
+        // The draws cover both the ramp and its capped body.
+        assert!(
+            inside > 1_000 && capped > 100,
+            "{inside} in cloud, {capped} capped"
+        );
+        // The cloud model's entry point passes the preset's sharpness through.
+        let soft = CloudShape::default();
+        let sharp = CloudShape {
+            edge_sharpness: 3.0,
+            ..soft
+        };
+        let on_ramp = (0..100)
+            .map(|i| {
+                let mut s = sample(1.0, 2.0 / 3.0);
+                s.base[0] = 0.6 + 0.004 * i as f32;
+                (density(0.3, &s, &soft), density(0.3, &s, &sharp))
+            })
+            .filter(|(a, _)| *a > 0.0 && *a < soft.density / 3.0)
+            .inspect(|(a, b)| assert!((b - 3.0 * a).abs() < 1e-5, "{b} against 3 × {a}"))
+            .count();
+        assert!(on_ramp > 3, "only {on_ramp} samples on the soft ramp");
     }
 }
