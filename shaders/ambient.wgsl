@@ -17,11 +17,14 @@
 // w = cos θ / Σ_k N_k p_k(ω), and E ≈ π Σ L_i w_i / Σ w_i, V ≈ Σ T_i w_i / Σ w_i (normalised by
 // Σ w, which is π up to the quadrature's error, so that a clear sky gives V = 1 exactly).
 
-// The rays are marched in AMBIENT_SUBSETS interleaved subsets (ray i in subset i mod 3), one
+// The rays are marched in AMBIENT_SUBSETS interleaved subsets (ray i in subset i mod 12), one
 // subset per frame (all of them on a view's first frame and after its history is dropped:
 // a camera cut, a resize, a settings change); each subset keeps its sums, and
-// `ambient_resolve` adds the latest of all of them. So a frame costs a third of the rays, the
-// estimate is the whole set's, and each part of it is at most two frames old.
+// `ambient_resolve` adds the latest of all of them. So a frame costs a twelfth of the rays
+// (64), the estimate is the whole set's (768), and each part of it is at most eleven frames
+// old. Twelve subsets, not three (before 2026-12-07): a sparse cumulus sky has a few bright
+// clouds, each about as wide as the solid angle one of 128 cosine rays stands for, and 192
+// directions put the probe up to 27% off the picture's integral; 768 are within 6.3%.
 // Each ray is marched in AMBIENT_PARTS consecutive ranges of its steps, one per invocation
 // (march_layer, shaders/march_ray.wgsl), put together front to back in workgroup memory: the
 // pass is a few hundred invocations, so its time on a GPU is one ray's chain of dependent
@@ -33,18 +36,18 @@
 @group(0) @binding(13) var<storage, read_write> ambient_out: array<vec4f, 2>;
 // Per subset, hemisphere and workgroup (index AMBIENT_GROUPS × (2 × subset + hemisphere) +
 // group), two vec4: the weighted sums of (L, T), and (the sum of the weights, 0, 0, 0).
-@group(0) @binding(14) var<storage, read_write> ambient_partial: array<vec4f, 96>;
+@group(0) @binding(14) var<storage, read_write> ambient_partial: array<vec4f, 384>;
 // x: the first subset this frame marches, y: how many (1, or all 3).
 @group(0) @binding(15) var<storage, read> ambient_params: vec4u;
 
-const AMBIENT_SUBSETS: u32 = 3u;
+const AMBIENT_SUBSETS: u32 = 12u;
 const AMBIENT_THREADS: u32 = 64u;
 const AMBIENT_PARTS: u32 = 8u;
 // Rays per workgroup, and workgroups per subset and hemisphere (64 rays).
 const AMBIENT_GROUP_RAYS: u32 = 8u;
 const AMBIENT_GROUPS: u32 = 8u;
-const AMBIENT_COSINE_RAYS: u32 = 128u;
-const AMBIENT_SUN_RAYS: u32 = 64u;
+const AMBIENT_COSINE_RAYS: u32 = 512u;
+const AMBIENT_SUN_RAYS: u32 = 256u;
 const GOLDEN_ANGLE: f32 = 2.39996322973;
 
 var<workgroup> partial: array<vec4f, 64>;

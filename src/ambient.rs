@@ -3,8 +3,8 @@
 //! the clouds with what the clouds do to the sky.
 //!
 //! The ambient probe (shaders/ambient.wgsl) marches, per hemisphere around the local vertical,
-//! 128 cosine-weighted rays and 64 around the sun (the phase function's lobes) with the march's
-//! own ray function, a third of them per frame (all of them when the view has no history).
+//! 512 cosine-weighted rays and 256 around the sun (the phase function's lobes) with the march's
+//! own ray function, a twelfth of them per frame (all of them when the view has no history).
 //! For each hemisphere it gives the clouds' irradiance E_clouds = ∫ L_clouds(ω) cos θ dω (what they scatter toward
 //! the camera, haze included, in the sun's units) and the sky visibility
 //! V = 1/π ∫ T(ω) cos θ dω, the cosine-weighted transmittance through them: the share of the

@@ -939,7 +939,7 @@ impl Renderer {
                 None => (&self.no_shadow.view, &self.no_shadow.sampling),
             };
             // The whole probe where the view has no history (first frame, camera cut, resize,
-            // settings change), else a third of it in turn.
+            // settings change), else one of its twelve subsets in turn.
             let no_history = state.history.view_proj.is_none();
             state
                 .ambient

@@ -15,8 +15,8 @@ use nimbus::{
 const BOTTOM: f32 = 1_000.0;
 const TOP: f32 = 2_000.0;
 /// The probe's rays per hemisphere (shaders/ambient.wgsl).
-const COSINE_RAYS: usize = 128;
-const SUN_RAYS: usize = 64;
+const COSINE_RAYS: usize = 512;
+const SUN_RAYS: usize = 256;
 const GOLDEN_ANGLE: f32 = 2.399_963_2;
 const PI: f32 = std::f32::consts::PI;
 
@@ -43,9 +43,9 @@ fn frame_at(eye: Vec3, dir: Vec3, up: Vec3, fov_deg: f32, aspect: f32, sun: Sun)
     }
 }
 
-/// The probe marches a third of its rays per frame once a view has history: three frames
-/// of the same inputs update all of it.
-const SUBSETS: usize = 3;
+/// The probe marches one of its twelve ray subsets per frame once a view has history: twelve
+/// frames of the same inputs update all of it.
+const SUBSETS: usize = 12;
 
 fn ambient_at_time(h: &mut Headless, eye: Vec3, sun: Sun, time: f64) -> AmbientLight {
     let f = FrameInputs {
@@ -391,44 +391,65 @@ fn unknown_views_and_views_without_a_frame_are_refused() {
     ));
 }
 
+/// The probe against the picture's integral over the hemisphere, from three places under the
+/// cumulus presets (the sky's few bright clouds fall differently on the fixed directions from
+/// each) and one under the overcast deck. With 192 directions (three subsets, before
+/// 2026-12-07) sparse cumulus came out 3.6%, 1.6% and 27% low from x = 0, 5 and 10 km: a
+/// cloud 1 km wide at 5 km subtends about as much as one cosine ray stands for (2π / 128 sr),
+/// so a few clouds near the sun fell between the rays. With 768 (twelve subsets): 1.8%, 0.9%
+/// and 6.3%; cloudy 0.2%, 2.0%, 0.9%; overcast 0.8%.
 #[test]
 fn in_the_noise_model_the_probe_matches_the_picture() {
-    let eye = Vec3::new(0.0, 2.0, 0.0);
-    for (name, weather) in [
-        ("sparse", nimbus::weather::Weather::sparse()),
-        ("cloudy", nimbus::weather::Weather::cloudy()),
-        ("overcast", nimbus::weather::Weather::overcast()),
+    let mut errors = Vec::new();
+    for (name, weather, places) in [
+        (
+            "sparse",
+            nimbus::weather::Weather::sparse(),
+            &[0.0, 5_000.0, 10_000.0][..],
+        ),
+        (
+            "cloudy",
+            nimbus::weather::Weather::cloudy(),
+            &[0.0, 5_000.0, 10_000.0][..],
+        ),
+        ("overcast", nimbus::weather::Weather::overcast(), &[0.0][..]),
     ] {
         let mut s = quiet(small_noise(3));
         s.weather = weather;
         let mut h = headless(s);
-        let sun = Sun::default();
-        let light = ambient_at(&mut h, eye, sun).above;
-        let picture = picture_irradiance(&mut h, eye, sun, 96);
-        let (e, v) = (picture.truncate(), picture.w / PI);
-        let error = ((light.cloud_irradiance - e) / e).abs().max_element();
-        println!(
-            "{name}: probe E {:.4} V {:.4}; picture E {e:.4} V {v:.4}; E off by {:.1}%",
-            light.cloud_irradiance,
-            light.sky_visibility,
-            100.0 * error
-        );
-        assert!(
-            error < 0.05,
-            "{name}: E {} against {e}",
-            light.cloud_irradiance
-        );
-        assert!(
-            (light.sky_visibility - v).abs() < 0.02,
-            "{name}: V {} against {v}",
-            light.sky_visibility
-        );
+        for &x in places {
+            let eye = Vec3::new(x, 2.0, 0.0);
+            let sun = Sun::default();
+            let light = ambient_at(&mut h, eye, sun).above;
+            let picture = picture_irradiance(&mut h, eye, sun, 96);
+            let (e, v) = (picture.truncate(), picture.w / PI);
+            let error = ((light.cloud_irradiance - e) / e).abs().max_element();
+            println!(
+                "{name} at x {x} m: probe E {:.4} V {:.4}; picture E {e:.4} V {v:.4}; E off by {:.1}%",
+                light.cloud_irradiance,
+                light.sky_visibility,
+                100.0 * error
+            );
+            assert!(
+                error < 0.08,
+                "{name} at x {x} m: E {} against {e}",
+                light.cloud_irradiance
+            );
+            assert!(
+                (light.sky_visibility - v).abs() < 0.02,
+                "{name} at x {x} m: V {} against {v}",
+                light.sky_visibility
+            );
+            errors.push(error);
+        }
     }
+    let mean = errors.iter().sum::<f32>() / errors.len() as f32;
+    assert!(mean < 0.04, "E off by {:.1}% on average", 100.0 * mean);
 }
 
 #[test]
-fn a_third_of_the_rays_per_frame_adds_up_to_the_whole_probe() {
-    // Temporal on: after the first frame one subset of rays a frame. Three frames with a new
+fn one_subset_of_the_rays_per_frame_adds_up_to_the_whole_probe() {
+    // Temporal on: after the first frame one subset of rays a frame. SUBSETS frames with a new
     // sun give exactly what the whole probe gives at once (a view without history).
     let mut h = headless(small_noise(3));
     let eye = Vec3::new(0.0, 2.0, 0.0);
@@ -450,13 +471,15 @@ fn a_third_of_the_rays_per_frame_adds_up_to_the_whole_probe() {
         h.render(&f).unwrap();
         seen.push(h.renderer().read_ambient_light(ViewId::DEFAULT).unwrap());
     }
-    // Each frame moved it (a third of the rays had the new sun), none alone got there...
+    // Each frame moved it (a twelfth of the rays had the new sun), none before the last got
+    // there...
     assert_ne!(seen[0], first);
-    assert_ne!(seen[0], seen[1]);
-    assert_ne!(seen[1], seen[2]);
-    // ...and the third equals the whole probe, made at once on a view with no history.
+    for k in 1..SUBSETS {
+        assert_ne!(seen[k - 1], seen[k], "frame {k} changed nothing");
+    }
+    // ...and the last equals the whole probe, made at once on a view with no history.
     h.renderer_mut().reset_history();
     h.render(&f).unwrap();
     let whole = h.renderer().read_ambient_light(ViewId::DEFAULT).unwrap();
-    assert_eq!(seen[2], whole);
+    assert_eq!(seen[SUBSETS - 1], whole);
 }
