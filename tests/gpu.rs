@@ -1140,7 +1140,7 @@ fn clouds_in_the_planets_shadow_keep_their_sky_light() {
 fn reduced_resolution_keeps_occluders_exact_and_stays_close_to_full() {
     use nimbus::settings::TraceResolution;
     let render = |resolution| {
-        let mut settings = quiet(small_noise(1));
+        let mut settings = common::measured_shape(quiet(small_noise(1)));
         settings.march.resolution = resolution;
         let mut h = headless(settings);
         let mut view = standard_views()[4]; // mountains: a ridge in front of the clouds

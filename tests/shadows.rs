@@ -364,6 +364,7 @@ fn light_from_the_map_equals_the_full_light_march_in_a_slab() {
 fn light_from_the_map_stays_within_the_flip_budget_on_the_noise_model() {
     let mut s = with_shadows(quiet(small_noise(2)), 1);
     s.weather = Preset::Cloudy.weather();
+    let mut s = common::measured_shape(s);
     s.shadows.extent = 40_000.0;
     s.shadows.resolution = 256;
     // The full light march stops at lighting.light_distance (3 km by default), the map's

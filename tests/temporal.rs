@@ -4,14 +4,19 @@
 
 mod common;
 
-use common::{f16, headless, quiet, small_noise, H, W};
+use common::{f16, headless, measured_shape, quiet, H, W};
 use nimbus::demo::{standard_views, DemoView, Occluder};
 use nimbus::glam::Vec3;
 use nimbus::{Headless, Settings, Temporal, TracePattern};
 
+/// This file's clouds: the small volumes on the shape its budgets were measured on.
+fn scene(seed: u32) -> Settings {
+    measured_shape(common::small_noise(seed))
+}
+
 /// Jitter off (so repeated samples of a pixel agree) with temporal reprojection on.
 fn steady(pattern: TracePattern) -> Settings {
-    let mut s = quiet(small_noise(1));
+    let mut s = quiet(scene(1));
     s.march.temporal = Temporal {
         enabled: true,
         pattern,
@@ -44,7 +49,7 @@ fn mean_difference(a: &[[f32; 4]], b: &[[f32; 4]]) -> f64 {
 
 /// The full march of one frame, every pixel traced.
 fn full_march(view: &DemoView) -> Vec<[f32; 4]> {
-    let mut h = headless(quiet(small_noise(1)));
+    let mut h = headless(quiet(scene(1)));
     show(&mut h, view, 0.0);
     h.read_clouds().unwrap()
 }
@@ -163,7 +168,7 @@ fn occluders_stay_exact_and_motion_does_not_smear() {
             }
         }
     }
-    let mut full = headless(quiet(small_noise(1)));
+    let mut full = headless(quiet(scene(1)));
     let scene = last.scene(W, H);
     full.upload_scene(&scene.color, Some(&scene.depth)).unwrap();
     full.render(&last.frame(W, H, 19.0 / 30.0)).unwrap();
@@ -185,7 +190,7 @@ type SwitchOn = fn(&mut Settings);
 fn each_optimisation_stays_close_to_the_plain_march() {
     let view = standard_views()[0];
     let plain = {
-        let mut s = quiet(small_noise(1));
+        let mut s = quiet(scene(1));
         s.march.coarse_then_fine = false;
         s.march.distance_steps = false;
         s.march.noise_lod = false;
@@ -253,11 +258,11 @@ fn ray_counters_count_the_traced_pixels() {
         stats.mean_samples > 1.0 && stats.mean_light_samples > 1.0,
         "{stats:?}"
     );
-    let mut h = headless(quiet(small_noise(1)));
+    let mut h = headless(quiet(scene(1)));
     show(&mut h, &view, 0.0);
     assert_eq!(h.read_ray_stats().unwrap().rays, (W * H) as u64);
     // Looking down from far above an empty sky: no layer crossed, no samples.
-    let mut clear = quiet(small_noise(1));
+    let mut clear = quiet(scene(1));
     clear.weather = nimbus::Weather::clear();
     h.renderer_mut().set_settings(clear).unwrap();
     show(&mut h, &view, 0.0);
@@ -288,7 +293,7 @@ fn noise_lod_engages_with_full_size_volumes_and_stays_close() {
     // always right and the switch cannot show: use the default 128³ / 32³ volumes.
     let view = standard_views()[0];
     let plain = {
-        let mut s = quiet(Settings::default());
+        let mut s = quiet(measured_shape(Settings::default()));
         s.march.noise_lod = false;
         s
     };
@@ -314,7 +319,7 @@ fn noise_lod_engages_with_full_size_volumes_and_stays_close() {
 /// `max_mean` of the full-resolution plain march.
 fn reduced_grid_settles_to_its_own_full_march(level: nimbus::Quality, divisor: u32, max_mean: f64) {
     let view = standard_views()[0];
-    let mut settings = small_noise(1);
+    let mut settings = scene(1);
     level.apply(&mut settings);
     settings.march.jitter = false;
     assert_eq!(settings.march.resolution.divisor(), divisor);
@@ -350,7 +355,7 @@ fn reduced_grid_settles_to_its_own_full_march(level: nimbus::Quality, divisor: u
     assert!(worst_difference(&settled, &h.read_clouds().unwrap()) < 1e-3);
     // And the upsampled output is close to the full-resolution plain march.
     let full_res = {
-        let mut h = headless(quiet(small_noise(1)));
+        let mut h = headless(quiet(scene(1)));
         show(&mut h, &view, 0.0);
         h.read_output().unwrap()
     };
@@ -378,7 +383,7 @@ fn with_jitter_on_the_history_averages_toward_the_full_march() {
     let view = standard_views()[0];
     // The reference: many jittered full marches averaged (every pixel, every frame).
     let mut r = headless({
-        let mut s = small_noise(1);
+        let mut s = scene(1);
         s.march.temporal = Temporal::OFF;
         s
     });
@@ -394,7 +399,7 @@ fn with_jitter_on_the_history_averages_toward_the_full_march() {
     }
     let one_jittered = r.read_output().unwrap();
     // The default level (1 in 16, jitter on) after 64 frames: 4 samples per pixel.
-    let mut h = headless(small_noise(1));
+    let mut h = headless(scene(1));
     for _ in 0..64 {
         show(&mut h, &view, 0.0);
     }

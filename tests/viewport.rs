@@ -4,7 +4,7 @@
 //! stay exactly as they were; bad rectangles are refused.
 
 mod common;
-use common::{halfs, quiet, rgba, setup, small_noise, upload, H, W};
+use common::{halfs, measured_shape, quiet, rgba, setup, small_noise, upload, H, W};
 
 use nimbus::demo::standard_views;
 use nimbus::device::{read_texture, texture_2d};
@@ -31,7 +31,7 @@ fn viewport_render_matches_a_target_of_its_own() {
     // A little more cloud than the default's, so that at least a quarter of the view has some
     // to compare (2660 of 14 400 pixels at coverage 0.4 once cumulus were carved by their
     // noise).
-    let mut s = quiet(small_noise(3));
+    let mut s = measured_shape(quiet(small_noise(3)));
     s.weather.clouds.coverage = 0.5;
     compare(s, 1);
 }
@@ -40,7 +40,7 @@ fn viewport_render_matches_a_target_of_its_own() {
 /// renderer per target, 8 frames each.
 #[test]
 fn viewport_with_temporal_resolve_matches_too() {
-    let mut s = small_noise(3);
+    let mut s = measured_shape(small_noise(3));
     s.march.jitter = false;
     compare(s, 8);
 }
