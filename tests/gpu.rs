@@ -1136,6 +1136,80 @@ fn clouds_in_the_planets_shadow_keep_their_sky_light() {
 
 // ---- reduced-resolution tracing ----------------------------------------------------------------
 
+/// The bilinear interpolation of a `gw`×`gh` grid at output pixel (x, y) of a grid `divisor`
+/// times finer: texel centres at (i + 0.5) × divisor output pixels, edges clamped.
+fn bilinear_upsample(
+    grid: &[[f32; 4]],
+    gw: u32,
+    gh: u32,
+    divisor: u32,
+    x: u32,
+    y: u32,
+) -> [f32; 4] {
+    let axis = |p: u32, n: u32| {
+        let q = (p as f32 + 0.5) / divisor as f32 - 0.5;
+        let lo = q.floor();
+        let f = q - lo;
+        let at = |i: f32| (i.max(0.0) as u32).min(n - 1);
+        (at(lo), at(lo + 1.0), f)
+    };
+    let (x0, x1, fx) = axis(x, gw);
+    let (y0, y1, fy) = axis(y, gh);
+    let texel = |i: u32, j: u32| grid[(j * gw + i) as usize];
+    let mut out = [0.0f32; 4];
+    for (c, v) in out.iter_mut().enumerate() {
+        let top = texel(x0, y0)[c] * (1.0 - fx) + texel(x1, y0)[c] * fx;
+        let bottom = texel(x0, y1)[c] * (1.0 - fx) + texel(x1, y1)[c] * fx;
+        *v = top * (1.0 - fy) + bottom * fy;
+    }
+    out
+}
+
+#[test]
+fn without_scene_depth_the_upsample_is_the_grids_bilinear_interpolation() {
+    // With no depth to tell surfaces apart, every sample is trusted by its bilinear weight
+    // alone: the composite of a reduced grid is exactly scene × T + L of the interpolated
+    // (L, T), up to the 1e-4 floor the depth-aware weights add and the f16 targets. An oracle
+    // for the upsample that no retuning of the clouds moves (the distance from the full-
+    // resolution march is the grid's own loss: `reduced_resolution_keeps_occluders_exact_...`).
+    use nimbus::settings::TraceResolution;
+    let view = standard_views()[0];
+    let scene = view.scene(W, H);
+    for (resolution, divisor) in [(TraceResolution::Half, 2), (TraceResolution::Quarter, 4)] {
+        let mut settings = quiet(small_noise(1));
+        settings.march.resolution = resolution;
+        let mut h = headless(settings);
+        h.upload_scene(&scene.color, None).unwrap();
+        h.render(&view.frame(W, H, 0.0)).unwrap();
+        let (gw, gh) = (W.div_ceil(divisor), H.div_ceil(divisor));
+        let grid = h.read_clouds().unwrap();
+        assert_eq!(grid.len() as u32, gw * gh, "{resolution:?}");
+        let out = h.read_output().unwrap();
+        let cloudy = grid.iter().filter(|v| v[3] < 0.9).count();
+        assert!(
+            cloudy * 5 > grid.len(),
+            "{resolution:?}: {cloudy} cloudy texels"
+        );
+        let mut worst = 0.0f32;
+        for y in 0..H {
+            for x in 0..W {
+                let i = (y * W + x) as usize;
+                let lt = bilinear_upsample(&grid, gw, gh, divisor, x, y);
+                for c in 0..3 {
+                    let want = f16(scene.color[i][c]) * lt[3] + lt[c];
+                    let err = (out[i][c] - want).abs() / want.abs().max(1.0);
+                    worst = worst.max(err);
+                }
+            }
+        }
+        println!("{resolution:?}: worst relative difference from bilinear {worst:.2e}");
+        assert!(
+            worst < 3e-3,
+            "{resolution:?}: {worst} from the bilinear upsample"
+        );
+    }
+}
+
 #[test]
 fn reduced_resolution_keeps_occluders_exact_and_stays_close_to_full() {
     use nimbus::settings::TraceResolution;
