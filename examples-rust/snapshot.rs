@@ -91,7 +91,10 @@ fn write_textures(nimbus: &Headless, out: &std::path::Path) -> Result<(), String
     let settings = Settings::default();
     let n = settings.noise.weather_size;
     let (weather, _) = nimbus.read_weather_maps().map_err(|e| e.to_string())?;
-    let rgb: Vec<u8> = weather.chunks(4).flat_map(|p| [p[0], p[1], p[2]]).collect();
+    let rgb: Vec<u8> = weather
+        .iter()
+        .flat_map(|p| [p[0], p[1], p[2]].map(|v| (v.clamp(0.0, 1.0) * 255.0).round() as u8))
+        .collect();
     let path = out.join("texture_weather_map.png");
     image::RgbImage::from_raw(n, n, rgb)
         .ok_or("weather map size")?

@@ -1,5 +1,6 @@
 // Freezes a running transition: out = mix(from, to, weight), texel by texel. The result
-// becomes the new "from" map, so an interrupted transition never pops.
+// becomes the new "from" map, so an interrupted transition never pops. In half floats: 8 bits
+// would move each texel by up to half a step (src/gpu/weather.rs).
 
 struct BlendParams {
     weight: f32,
@@ -11,7 +12,7 @@ struct BlendParams {
 @group(0) @binding(0) var<uniform> params: BlendParams;
 @group(0) @binding(1) var map_from: texture_2d<f32>;
 @group(0) @binding(2) var map_to: texture_2d<f32>;
-@group(0) @binding(3) var map_out: texture_storage_2d<rgba8unorm, write>;
+@group(0) @binding(3) var map_out: texture_storage_2d<rgba16float, write>;
 
 @compute @workgroup_size(8, 8, 1)
 fn blend_maps(@builtin(global_invocation_id) id: vec3u) {

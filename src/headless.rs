@@ -13,6 +13,9 @@ use crate::gpu::noise::NoiseVolume;
 use crate::renderer::{ColorTargets, Renderer, Targets};
 use crate::settings::Settings;
 
+/// A weather map read back: RGBA in [0, 1] per texel, x fastest (`Headless::read_weather_maps`).
+pub type WeatherMapTexels = Vec<[f32; 4]>;
+
 /// Largest edge Headless accepts for its targets.
 pub const MAX_HEADLESS_SIZE: u32 = 8192;
 
@@ -510,14 +513,20 @@ impl Headless {
         read_texture(&self.device, &self.queue, texture, mip)
     }
 
-    /// The running transition's (from, to) weather maps, RGBA8: R, G, B coverage of cloud
-    /// layers 1-3, A cirrus.
-    pub fn read_weather_maps(&self) -> Result<(Vec<u8>, Vec<u8>)> {
+    /// The running transition's (from, to) weather maps, texel by texel as the march reads
+    /// them (x fastest): R, G, B coverage of cloud layers 1-3, A cirrus, in [0, 1]. A generated
+    /// map holds multiples of 1/255 (RGBA8), the frozen blend of an interrupted transition
+    /// half floats (RGBA16F).
+    pub fn read_weather_maps(&self) -> Result<(WeatherMapTexels, WeatherMapTexels)> {
         let (from, to) = self.renderer.weather_maps();
-        Ok((
-            read_texture(&self.device, &self.queue, from, 0)?,
-            read_texture(&self.device, &self.queue, to, 0)?,
-        ))
+        let read = |t: &wgpu::Texture| -> Result<Vec<[f32; 4]>> {
+            let values = crate::query::TexelValues::from_bytes(
+                t.format(),
+                read_texture(&self.device, &self.queue, t, 0)?,
+            )?;
+            Ok((0..values.len()).map(|i| values.texel(i)).collect())
+        };
+        Ok((read(from)?, read(to)?))
     }
 
     /// Live wgpu objects on the owned device (all of them Nimbus's) and their GPU memory.

@@ -21,22 +21,68 @@ use crate::settings::{DebugDensity, Settings};
 use crate::weather::profile::{eroded_density, layered_base_density, layers_can_cloud, smoothstep};
 use crate::weather::{Timeline, WeatherSample};
 
-/// An RGBA8 texture as read back, sampled like the GPU's repeat / linear sampler.
+/// The texels of a read-back RGBA texture, in its own format.
+#[derive(Clone, Debug)]
+pub(crate) enum TexelValues {
+    /// RGBA8 unorm: the noise volumes and the generated weather maps.
+    Unorm8(Vec<u8>),
+    /// RGBA16F: a frozen blend of two weather maps (src/gpu/weather.rs).
+    Half(Vec<half::f16>),
+}
+
+impl TexelValues {
+    /// `bytes` as read back from a texture of `format`; an error for a format Nimbus does not
+    /// read back into a query.
+    pub fn from_bytes(format: wgpu::TextureFormat, bytes: Vec<u8>) -> Result<Self> {
+        match format {
+            wgpu::TextureFormat::Rgba8Unorm => Ok(Self::Unorm8(bytes)),
+            wgpu::TextureFormat::Rgba16Float => {
+                Ok(Self::Half(bytemuck::pod_collect_to_vec(&bytes)))
+            }
+            other => Err(Error::Readback(format!(
+                "a query cannot read a {other:?} texture"
+            ))),
+        }
+    }
+
+    /// Texel `i` (RGBA) as the GPU's sampler returns it.
+    pub fn texel(&self, i: usize) -> [f32; 4] {
+        match self {
+            Self::Unorm8(v) => {
+                let c = &v[i * 4..i * 4 + 4];
+                [c[0], c[1], c[2], c[3]].map(|v| v as f32 / 255.0)
+            }
+            Self::Half(v) => {
+                let c = &v[i * 4..i * 4 + 4];
+                [c[0], c[1], c[2], c[3]].map(half::f16::to_f32)
+            }
+        }
+    }
+
+    /// The number of texels.
+    pub fn len(&self) -> usize {
+        match self {
+            Self::Unorm8(v) => v.len() / 4,
+            Self::Half(v) => v.len() / 4,
+        }
+    }
+}
+
+/// An RGBA texture as read back, sampled like the GPU's repeat / linear sampler.
 #[derive(Clone, Debug)]
 pub(crate) struct Texels {
     pub size: u32,
     /// Depth 1 for a 2D map.
     pub depth: u32,
-    pub rgba: Vec<u8>,
+    pub values: TexelValues,
 }
 
 impl Texels {
     fn at(&self, x: i64, y: i64, z: i64) -> [f32; 4] {
         let n = self.size as i64;
         let d = self.depth as i64;
-        let i = ((z.rem_euclid(d) * n + y.rem_euclid(n)) * n + x.rem_euclid(n)) as usize * 4;
-        let c = &self.rgba[i..i + 4];
-        [c[0], c[1], c[2], c[3]].map(|v| v as f32 / 255.0)
+        let i = ((z.rem_euclid(d) * n + y.rem_euclid(n)) * n + x.rem_euclid(n)) as usize;
+        self.values.texel(i)
     }
 
     /// Trilinear (bilinear for a map) sample at texture coordinates `uvw` (repeat).
@@ -400,7 +446,7 @@ mod tests {
         let t = Texels {
             size: 2,
             depth: 1,
-            rgba: vec![0, 0, 0, 0, 255, 0, 0, 0, 0, 0, 0, 0, 255, 0, 0, 0],
+            values: TexelValues::Unorm8(vec![0, 0, 0, 0, 255, 0, 0, 0, 0, 0, 0, 0, 255, 0, 0, 0]),
         };
         assert_eq!(t.sample(Vec3::new(0.25, 0.25, 0.0))[0], 0.0);
         assert_eq!(t.sample(Vec3::new(0.75, 0.25, 0.0))[0], 1.0);

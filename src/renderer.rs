@@ -1125,7 +1125,7 @@ impl Renderer {
     /// 9 MB at the default sizes); later ones share that copy and cost nothing. A query made
     /// before a weather request keeps answering for the weather as it was: make a new one.
     pub fn cloud_query(&mut self) -> Result<crate::CloudQuery> {
-        use crate::query::{QueryData, Texels};
+        use crate::query::{QueryData, TexelValues, Texels};
         let camera = self
             .views
             .get(ViewId::DEFAULT)
@@ -1139,7 +1139,10 @@ impl Renderer {
             Ok(Texels {
                 size: t.width(),
                 depth: t.depth_or_array_layers(),
-                rgba: crate::device::read_texture(&self.device, &self.queue, t, 0)?,
+                values: TexelValues::from_bytes(
+                    t.format(),
+                    crate::device::read_texture(&self.device, &self.queue, t, 0)?,
+                )?,
             })
         };
         let (from, to) = self.weather_maps.textures();

@@ -78,6 +78,19 @@ pub(crate) fn map_texture(device: &wgpu::Device, label: &str, size: u32) -> wgpu
     )
 }
 
+/// A frozen blend of two weather maps (`weather_blend`): RGBA16F, so that the blend keeps
+/// the precision the two maps' mix has (src/gpu/weather.rs).
+pub(crate) fn frozen_map_texture(device: &wgpu::Device, label: &str, size: u32) -> wgpu::Texture {
+    use wgpu::TextureUsages as U;
+    super::texture_2d(
+        device,
+        label,
+        (size, size),
+        wgpu::TextureFormat::Rgba16Float,
+        U::TEXTURE_BINDING | U::STORAGE_BINDING | U::COPY_SRC,
+    )
+}
+
 /// A compute-stage sampled-texture layout entry.
 pub(crate) fn texture_entry(
     binding: u32,

@@ -1,12 +1,19 @@
-//! The weather maps on the GPU: four RGBA8 textures rotating through the roles "from", "to"
-//! and two free ones. A new weather is generated into a free texture, at once or a slice of
-//! rows per frame (`Generation`, so that a request costs no single frame a hitch), while the
-//! running transition keeps its two; an interrupted transition is frozen by blending "from"
-//! and "to" into the other free texture, which becomes the new "from".
+//! The weather maps on the GPU: five textures rotating through the roles "from" and "to". A
+//! new weather is generated into a free one of the three RGBA8 textures, at once or a slice
+//! of rows per frame (`Generation`, so that a request costs no single frame a hitch), while
+//! the running transition keeps its two; an interrupted transition is frozen by blending
+//! "from" and "to" into a free one of the two RGBA16F textures, which becomes the new "from".
+//!
+//! The frozen blend keeps 16 bits: stored in 8 (as the generated maps are, where the bake's
+//! own values are what the march and the path tracer read), the blend moved each texel by up
+//! to half a step, 0.002 of coverage. With sharpened cloud edges (`CloudShape::
+//! edge_sharpness` 4: a remap four times as steep) that shifted cloud outlines visibly at the
+//! moment of an interruption or a cancel; in half floats a texel is within 2^-11 (4.9e-4)
+//! of the blend.
 
 use bytemuck::{Pod, Zeroable};
 
-use super::compute::{compute_pipeline, dispatch, map_texture};
+use super::compute::{compute_pipeline, dispatch, frozen_map_texture, map_texture};
 use crate::weather::{MapAction, Weather};
 
 #[repr(C)]
@@ -29,8 +36,11 @@ struct BlendParams {
     _pad: [u32; 2],
 }
 
-/// Textures in the rotation: from, to, the one a generation writes, the one a blend writes.
-const SLOTS: usize = 4;
+/// Generated maps (RGBA8): from, to and the one a generation writes. Slots 0..BAKED.
+const BAKED: usize = 3;
+/// Frozen blends (RGBA16F): the one in use as from (and to, while a cancel holds it) and the
+/// one a blend writes. Slots BAKED..SLOTS.
+const SLOTS: usize = BAKED + 2;
 
 /// A weather map being generated over frames: one dispatch per slice of rows, each with its
 /// parameters and bind group made up front (nothing is created in the frames it runs in).
@@ -96,8 +106,14 @@ impl WeatherMaps {
         bake: wgpu::ComputePipeline,
         blend: wgpu::ComputePipeline,
     ) -> Self {
-        let textures =
-            std::array::from_fn(|i| map_texture(device, &format!("nimbus weather map {i}"), size));
+        let textures = std::array::from_fn(|i| {
+            let label = format!("nimbus weather map {i}");
+            if i < BAKED {
+                map_texture(device, &label, size)
+            } else {
+                frozen_map_texture(device, &label, size)
+            }
+        });
         let views = std::array::from_fn(|i: usize| textures[i].create_view(&Default::default()));
         Self {
             textures,
@@ -150,16 +166,23 @@ impl WeatherMaps {
         );
     }
 
-    /// The two textures that are neither from nor to.
-    fn free_slots(&self) -> [usize; 2] {
-        let mut free = (0..SLOTS).filter(|&i| i != self.from && i != self.to);
-        let first = free
-            .next()
-            .unwrap_or_else(|| unreachable!("four slots, two in use"));
-        let second = free
-            .next()
-            .unwrap_or_else(|| unreachable!("four slots, two in use"));
-        [first, second]
+    /// The first slot in `range` that is neither from nor to.
+    fn free_in(&self, range: std::ops::Range<usize>) -> usize {
+        range
+            .clone()
+            .find(|&i| i != self.from && i != self.to)
+            .unwrap_or_else(|| unreachable!("slots {range:?}: from and to take two at most"))
+    }
+
+    /// A generated map's texture that is neither from nor to (three, two in use at most).
+    fn free_baked(&self) -> usize {
+        self.free_in(0..BAKED)
+    }
+
+    /// A frozen blend's texture that is neither from nor to: only "from" holds a frozen
+    /// blend ("to" too while a cancel holds it, then the same slot), so one of two is free.
+    fn free_frozen(&self) -> usize {
+        self.free_in(BAKED..SLOTS)
     }
 
     /// Whether a map of this set's size takes more than one slice of `texels_per_frame`
@@ -179,7 +202,7 @@ impl WeatherMaps {
         texels_per_frame: u32,
     ) -> Generation {
         use wgpu::util::DeviceExt;
-        let slot = self.free_slots()[0];
+        let slot = self.free_baked();
         let rows = (texels_per_frame / self.size.max(1)).max(8) / 8 * 8;
         let layout = self.bake.get_bind_group_layout(0);
         let mut slices = Vec::new();
@@ -244,35 +267,21 @@ impl WeatherMaps {
             MapAction::KeepFrom => self.from,
             MapAction::ToBecomesFrom => self.to,
             MapAction::Bake(weight) => {
-                let spare = self.free_slots()[1];
-                debug_assert_ne!(spare, generation.slot);
-                self.record_blend(device, encoder, weight, spare);
-                spare
+                let frozen = self.free_frozen();
+                self.record_blend(device, encoder, weight, frozen);
+                frozen
             }
         };
         (from, generation.slot)
     }
 
-    /// Both maps become `weather`'s (an instant change). Generated once and copied: the
-    /// bake is the expensive part of a start on software rasterisers.
+    /// Both maps become `weather`'s (an instant change): one texture in both roles, generated
+    /// once (the bake is the expensive part of a start on software rasterisers).
     fn reset(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, weather: &Weather) {
         let mut encoder = device.create_command_encoder(&Default::default());
-        self.generate(device, &mut encoder, self.from, weather);
-        self.copy_slot(&mut encoder, self.from, self.to);
+        (self.from, self.to) = (0, 0);
+        self.generate(device, &mut encoder, 0, weather);
         queue.submit([encoder.finish()]);
-    }
-
-    fn copy_slot(&self, encoder: &mut wgpu::CommandEncoder, from: usize, to: usize) {
-        let size = wgpu::Extent3d {
-            width: self.size,
-            height: self.size,
-            depth_or_array_layers: 1,
-        };
-        encoder.copy_texture_to_texture(
-            self.textures[from].as_image_copy(),
-            self.textures[to].as_image_copy(),
-            size,
-        );
     }
 
     /// Records and submits what the timeline decided for a request toward `target`, and
@@ -285,35 +294,37 @@ impl WeatherMaps {
         action: MapAction,
         target: &Weather,
     ) -> (usize, usize) {
-        let spare = self.free_slots()[0];
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("nimbus weather transition"),
         });
-        let slots = match action {
-            MapAction::KeepFrom => (self.from, self.to),
-            MapAction::ToBecomesFrom => (self.to, self.from),
+        let from = match action {
+            MapAction::KeepFrom => self.from,
+            MapAction::ToBecomesFrom => self.to,
             MapAction::Bake(weight) => {
-                self.record_blend(device, &mut encoder, weight, spare);
-                // The frozen blend is the new start; the old start's texture is free.
-                (spare, self.from)
+                // The frozen blend is the new start.
+                let frozen = self.free_frozen();
+                self.record_blend(device, &mut encoder, weight, frozen);
+                frozen
             }
         };
+        // The target into a texture neither role holds now: the maps in use stay as they
+        // are until `commit`.
+        let slots = (from, self.free_baked());
         self.generate(device, &mut encoder, slots.1, target);
         queue.submit([encoder.finish()]);
         slots
     }
 
     /// Records and submits a hold (see `Timeline::hold`): `action` settles the `from` map as
-    /// for a request, and the `to` slot receives a copy of it, since the held sky is that map
-    /// (a frozen blend cannot be regenerated from parameters). Returns the new slots for
-    /// `commit`; nothing changes until then.
+    /// for a request, and it takes the `to` role too, since the held sky is that map (a frozen
+    /// blend cannot be regenerated from parameters). Returns the new slots for `commit`;
+    /// nothing changes until then.
     pub fn hold(
         &self,
         device: &wgpu::Device,
         queue: &wgpu::Queue,
         action: MapAction,
     ) -> (usize, usize) {
-        let spare = self.free_slots()[0];
         let mut encoder = device.create_command_encoder(&wgpu::CommandEncoderDescriptor {
             label: Some("nimbus weather hold"),
         });
@@ -321,15 +332,13 @@ impl WeatherMaps {
             MapAction::KeepFrom => self.from,
             MapAction::ToBecomesFrom => self.to,
             MapAction::Bake(weight) => {
-                self.record_blend(device, &mut encoder, weight, spare);
-                spare
+                let frozen = self.free_frozen();
+                self.record_blend(device, &mut encoder, weight, frozen);
+                frozen
             }
         };
-        // Any slot but `from` takes the copy.
-        let to = if from == self.to { self.from } else { self.to };
-        self.copy_slot(&mut encoder, from, to);
         queue.submit([encoder.finish()]);
-        (from, to)
+        (from, from)
     }
 
     fn record_blend(
