@@ -520,10 +520,7 @@ impl Headless {
     pub fn read_weather_maps(&self) -> Result<(WeatherMapTexels, WeatherMapTexels)> {
         let (from, to) = self.renderer.weather_maps();
         let read = |t: &wgpu::Texture| -> Result<Vec<[f32; 4]>> {
-            let values = crate::query::TexelValues::from_bytes(
-                t.format(),
-                read_texture(&self.device, &self.queue, t, 0)?,
-            )?;
+            let values = crate::query::TexelValues::read(&self.device, &self.queue, t)?;
             Ok((0..values.len()).map(|i| values.texel(i)).collect())
         };
         Ok((read(from)?, read(to)?))

@@ -33,7 +33,7 @@ pub(crate) enum TexelValues {
 impl TexelValues {
     /// `bytes` as read back from a texture of `format`; an error for a format Nimbus does not
     /// read back into a query.
-    pub fn from_bytes(format: wgpu::TextureFormat, bytes: Vec<u8>) -> Result<Self> {
+    fn from_bytes(format: wgpu::TextureFormat, bytes: Vec<u8>) -> Result<Self> {
         match format {
             wgpu::TextureFormat::Rgba8Unorm => Ok(Self::Unorm8(bytes)),
             wgpu::TextureFormat::Rgba16Float => {
@@ -43,6 +43,16 @@ impl TexelValues {
                 "a query cannot read a {other:?} texture"
             ))),
         }
+    }
+
+    /// Mip 0 of `texture`, read back.
+    pub fn read(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        texture: &wgpu::Texture,
+    ) -> Result<Self> {
+        let bytes = crate::gpu::readback::read_texture(device, queue, texture, 0)?;
+        Self::from_bytes(texture.format(), bytes)
     }
 
     /// Texel `i` (RGBA) as the GPU's sampler returns it.

@@ -1139,10 +1139,7 @@ impl Renderer {
             Ok(Texels {
                 size: t.width(),
                 depth: t.depth_or_array_layers(),
-                values: TexelValues::from_bytes(
-                    t.format(),
-                    crate::device::read_texture(&self.device, &self.queue, t, 0)?,
-                )?,
+                values: TexelValues::read(&self.device, &self.queue, t)?,
             })
         };
         let (from, to) = self.weather_maps.textures();

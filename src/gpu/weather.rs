@@ -13,7 +13,7 @@
 
 use bytemuck::{Pod, Zeroable};
 
-use super::compute::{compute_pipeline, dispatch, frozen_map_texture, map_texture};
+use super::compute::{compute_pipeline, dispatch, map_texture};
 use crate::weather::{MapAction, Weather};
 
 #[repr(C)]
@@ -107,12 +107,12 @@ impl WeatherMaps {
         blend: wgpu::ComputePipeline,
     ) -> Self {
         let textures = std::array::from_fn(|i| {
-            let label = format!("nimbus weather map {i}");
-            if i < BAKED {
-                map_texture(device, &label, size)
+            let format = if i < BAKED {
+                wgpu::TextureFormat::Rgba8Unorm
             } else {
-                frozen_map_texture(device, &label, size)
-            }
+                wgpu::TextureFormat::Rgba16Float
+            };
+            map_texture(device, &format!("nimbus weather map {i}"), size, format)
         });
         let views = std::array::from_fn(|i: usize| textures[i].create_view(&Default::default()));
         Self {
