@@ -250,12 +250,15 @@ fn chunk(
     if std::fs::create_dir_all(cache_dir()).is_ok() {
         let _ = std::fs::write(cache_dir().join(&name), &bytes);
     }
+    store::used(&name, settings, f, size, spp, seed);
     if store::keeping() {
         let write = std::fs::create_dir_all(store_dir())
             .and_then(|()| std::fs::write(store_dir().join(&name), &bytes));
         write.map_err(|e| format!("the store {}: {e}", store_dir().display()))?;
+        // Its manifest line at once: a run stopped before its end (a long reference traced
+        // across sessions) leaves a store whose every chunk says what it is.
+        store::record(&name)?;
     }
-    store::used(&name, settings, f, size, spp, seed);
     Ok(img)
 }
 
@@ -351,9 +354,10 @@ fn store_dir() -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/fidelity/references")
 }
 
-/// The store's bookkeeping: `--keep` writes every chunk a run traces into the store too, and
-/// rewrites its manifest (docs/fidelity/references/MANIFEST.tsv: one line per chunk, what it
-/// is a trace of); a `--keep` run of the whole table also drops the chunks it did not use
+/// The store's bookkeeping: `--keep` writes every chunk a run traces into the store too, with
+/// its line in the manifest (docs/fidelity/references/MANIFEST.tsv: one line per chunk, what
+/// it is a trace of) as soon as it is traced; at its end the run adds the chunks it read from
+/// the cache; a `--keep` run of the whole table also drops the chunks it did not use
 /// (those of an older path tracer or of views the table no longer has).
 mod store {
     use super::*;
@@ -420,21 +424,12 @@ mod store {
                 copied += 1;
             }
         }
-        let manifest = dir.join("MANIFEST.tsv");
-        let mut lines: BTreeMap<String, String> = BTreeMap::new();
-        if !whole {
-            // A partial run keeps the lines of the chunks it did not touch.
-            for line in std::fs::read_to_string(&manifest)
-                .unwrap_or_default()
-                .lines()
-            {
-                if let Some((name, _)) = line.split_once('\t') {
-                    if dir.join(name).exists() {
-                        lines.insert(name.to_string(), line.to_string());
-                    }
-                }
-            }
-        }
+        // A partial run keeps the lines of the chunks it did not touch.
+        let mut lines = if whole {
+            BTreeMap::new()
+        } else {
+            manifest_lines(&dir)
+        };
         lines.extend(used.clone());
         let mut removed = 0;
         if whole {
@@ -447,6 +442,33 @@ mod store {
                 }
             }
         }
+        write_manifest(&dir, &lines)?;
+        Ok(Some(format!(
+            "store {}: {} chunks ({copied} added, {removed} removed)",
+            dir.display(),
+            lines.len()
+        )))
+    }
+    /// Adds the line of one chunk just written to the store to its manifest.
+    pub(super) fn record(name: &str) -> Result<(), String> {
+        let line = USED.lock().map_err(|e| e.to_string())?.get(name).cloned();
+        let dir = store_dir();
+        let mut lines = manifest_lines(&dir);
+        lines.extend(line.map(|l| (name.to_string(), l)));
+        write_manifest(&dir, &lines)
+    }
+
+    /// The manifest's lines of the chunks the store holds, by file name.
+    fn manifest_lines(dir: &Path) -> BTreeMap<String, String> {
+        let text = std::fs::read_to_string(dir.join("MANIFEST.tsv")).unwrap_or_default();
+        text.lines()
+            .filter_map(|line| line.split_once('\t').map(|(name, _)| (name, line)))
+            .filter(|(name, _)| name.ends_with(".bin") && dir.join(name).exists())
+            .map(|(name, line)| (name.to_string(), line.to_string()))
+            .collect()
+    }
+
+    fn write_manifest(dir: &Path, lines: &BTreeMap<String, String>) -> Result<(), String> {
         let mut text = String::from(
             "# file\tmedium\tview\tsize\tsamples per pixel\tseed (written by \
              examples-rust/fidelity.rs --keep; little-endian f32 rgba per pixel, rows from the top)\n",
@@ -455,12 +477,7 @@ mod store {
             text.push_str(line);
             text.push('\n');
         }
-        std::fs::write(&manifest, text).map_err(|e| e.to_string())?;
-        Ok(Some(format!(
-            "store {}: {} chunks ({copied} added, {removed} removed)",
-            dir.display(),
-            lines.len()
-        )))
+        std::fs::write(dir.join("MANIFEST.tsv"), text).map_err(|e| e.to_string())
     }
 }
 
