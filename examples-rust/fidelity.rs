@@ -379,10 +379,17 @@ mod store {
         spp: u32,
         seed: u16,
     ) {
+        // A noise-model chunk names its weather and the shape knobs the presets' look is
+        // tuned with, so that two traces of the same view before and after a retune tell
+        // apart.
+        let c = &settings.weather.clouds;
         let medium = match settings.debug_density {
-            DebugDensity::Off => "noise model",
-            DebugDensity::Slab { .. } => "slab",
-            DebugDensity::Sphere { .. } => "sphere",
+            DebugDensity::Off => format!(
+                "noise model \"{}\" (coverage {}, density {}, detail {}, edge sharpness {})",
+                settings.weather.name, c.coverage, c.density, c.detail_strength, c.edge_sharpness
+            ),
+            DebugDensity::Slab { .. } => "slab".into(),
+            DebugDensity::Sphere { .. } => "sphere".into(),
         };
         let eye = f.camera.view.inverse().w_axis.truncate();
         let sun = f.sun.direction;
