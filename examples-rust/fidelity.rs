@@ -20,16 +20,18 @@
 //! [--noise-spp N] [--overcast-spp N] [--closeup-spp N] [--only slab|above|sphere|noise]
 //! [--view sparse_ground|overcast_ground|sparse_above|sparse_closeup]
 //! [--quality LEVEL] [--pictures DIR] [--bands]
-//! [--dump DIR] [--by-transmittance] [--single] [--no-ambient] [--fresh] [--keep]` (software
-//! Vulkan: minutes to hours, by the sample counts). Path-traced images are cached under
+//! [--dump DIR] [--by-transmittance] [--single] [--no-ambient] [--fresh] [--keep] [--reverse]`
+//! (software Vulkan: minutes to hours, by the sample counts). Path-traced images are cached under
 //! target/fidelity-cache, or the folder NIMBUS_FIDELITY_CACHE names, and read from the
 //! committed store docs/fidelity/references too (keyed by medium, view, sample count, seed and
 //! the path tracer's and medium's shader sources: the debug media's key leaves out the
 //! clouds' density model); `--fresh` traces anew; `--keep` puts what a run uses into the store
-//! (and `--write --keep` drops the store's chunks the table no longer reads). On a lent GPU
-//! (minutes instead of hours): run the same command with `--keep` there and bring the store
-//! back as one archive (`tar -cf $OUT/references.tar docs/fidelity/references`), then unpack it
-//! here and rerun. `--bands` prints the march's and the
+//! (and `--write --keep` drops the store's chunks the table no longer reads); `--reverse`
+//! traces a view's chunks last first, for a second process beside a first on the same view
+//! (one trace left a fifth of two CPU cores idle on llvmpipe; the two meet in the cache). On
+//! a lent GPU (minutes instead of hours): run the same command with `--keep` there and bring
+//! the store back as one archive (`tar -cf $OUT/references.tar docs/fidelity/references`),
+//! then unpack it here and rerun. `--bands` prints the march's and the
 //! reference's means in strips across each sphere and noise view; `--dump DIR` writes their
 //! float images (march, path traced, and its two halves) for analysis; `--by-transmittance`
 //! compares the means in bands of the reference's transmittance; `--single` compares single
@@ -195,15 +197,24 @@ fn both(
     // (0 or 1) seeded 2k + h + 1 (so a higher count reuses the cached chunks of a lower one:
     // the first pair is the reference of `samples.chunk` samples).
     let pairs = samples.pairs();
+    // `--reverse` traces the chunks last first, so that a second process started beside a
+    // first on the same view takes the other end of the list; each reads the other's finished
+    // chunks from the cache when they meet. The sums below run in seed order either way.
+    let seeds: Vec<u16> = (1..=2 * pairs as u16).collect();
+    let mut order: Vec<usize> = (0..seeds.len()).collect();
+    if std::env::args().any(|a| a == "--reverse") {
+        order.reverse();
+    }
+    let mut traced = vec![Image::new(); seeds.len()];
+    for i in order {
+        traced[i] = chunk(&h, settings, f, size, samples.chunk, seeds[i], single)?;
+    }
     let mut halves = vec![vec![[0.0f32; 4]; (size.0 * size.1) as usize]; 2];
-    for k in 0..pairs {
-        for (side, half) in halves.iter_mut().enumerate() {
-            let seed = (2 * k + side as u32 + 1) as u16;
-            let img = chunk(&h, settings, f, size, samples.chunk, seed, single)?;
-            for (sum, px) in half.iter_mut().zip(&img) {
-                for c in 0..4 {
-                    sum[c] += px[c] / pairs as f32;
-                }
+    for (i, img) in traced.iter().enumerate() {
+        // Seed 2k + 1 is chunk k of the first half, 2k + 2 of the second.
+        for (sum, px) in halves[i % 2].iter_mut().zip(img) {
+            for c in 0..4 {
+                sum[c] += px[c] / pairs as f32;
             }
         }
     }
