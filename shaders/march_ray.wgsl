@@ -285,6 +285,43 @@ fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, tau_diffuse: f32, sigma_t: f
     return vec2f(light, ambient_share);
 }
 
+// How fast (1/m) the sun's optical depth grows along the view ray at p, whose extinction is
+// sigma_t: in a layer lit from above, τ_sun is the depth below the sunlit top over μ0, so it
+// grows by sigma_t (-dir · up) / μ0 per metre (exact in the debug slab; for the noise model the
+// layer's geometry, as its diffuse columns take it). 0 in the debug sphere, whose depth toward
+// the sun is not a layer's.
+fn skin_rate(p: vec3f, dir: vec3f, sigma_t: f32) -> f32 {
+    if (debug_mode() == DEBUG_SPHERE) {
+        return 0.0;
+    }
+    let local_up = normalize(p + u.planet.xyz * u.planet.w);
+    let mu0 = max(dot(u.sun.xyz, local_up), DE_MIN_MU0);
+    return sigma_t * -dot(dir, local_up) / mu0;
+}
+
+// The single scattering's share of a march step of length dt (extinction sigma_t) whose sample,
+// `offset` into the step, sees the sun through optical depth tau, which grows along the step at
+// `rate` (skin_rate): x, ∫ e^{-sigma_t x - τ_sun(x)} dx over the step, per unit phase and
+// source, exact where τ_sun is linear along it; y, the same from the step's end on without end
+// (the early exit's remainder), at the step's end. Held constant over the step (Hillaire 2016),
+// a sample half a step in sees e^{-rate dt / 2} of the light its step's front does: from
+// 1.5 km above a slab of τ 50 (σt 0.1 /m, about 20 m steps), single scattering came out 0.70
+// to 0.91 of the closed form.
+fn skin_step(tau: f32, rate: f32, offset: f32, dt: f32, sigma_t: f32) -> vec2f {
+    let x = clamp(offset, 0.0, dt);
+    // τ_sun at the step's start (never below 0), and the rate no steeper downward than that
+    // reaches 0 at the step's end.
+    let tau0 = max(tau - rate * x, 0.0);
+    let k = max(rate, -tau0 / max(dt, 1e-6));
+    let total = sigma_t + k;
+    var within = dt;
+    if (abs(total * dt) > 1e-4) {
+        within = (1.0 - exp(-total * dt)) / total;
+    }
+    let at_end = exp(-(tau0 + k * dt));
+    return vec2f(exp(-tau0) * within, at_end / (sigma_t + max(k, 0.0)));
+}
+
 // One view ray from `cam` along `dir` up to `max_t` (m): the in-scattered radiance, the
 // transmittance and the depths the march pass writes for a pixel. Shared by the march (a
 // pixel's ray) and the ambient probe (a hemisphere of rays at the camera), so that the probe
@@ -505,7 +542,8 @@ fn march_layer(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32
             // Wrenninge 2015 multiple-scattering octaves. The first (single scattering) out of
             // the loop: the others index phase_oct by the loop counter, which a software
             // rasteriser gathers from scratch memory lane by lane.
-            var ms = phase_oct[0] * exp(-tau);
+            let single = phase_oct[0] * exp(-tau);
+            var ms = single;
             var a_i = u.ms.y;
             var b_i = u.ms.z;
             for (var o = 1u; o < octaves; o++) {
@@ -533,19 +571,25 @@ fn march_layer(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32
                 hf = select(hf, column.y, debug_mode() == DEBUG_OFF);
             }
             let ambient = mix(u.ambient_bottom.rgb, u.ambient_top.rgb, hf);
-            let source = u.shape.w * sigma_t * (sun_radiance * ms + ambient);
-            // Hillaire 2016 energy-conserving integration over the step.
+            // Hillaire 2016 energy-conserving integration over the step, the source held at the
+            // sample's, except the single scattering's: it falls off along the step as the
+            // sun's optical depth grows (skin_rate), which in a dense medium seen from the sun's
+            // side is within the step as fast as the view's own extinction.
             let step_t = exp(-sigma_t * dt);
-            radiance += transmittance * source * (1.0 - step_t) / sigma_t;
+            let skin = skin_step(tau, skin_rate(p, dir, sigma_t), s - total * pow(x0, power), dt, sigma_t);
+            let single_source = u.shape.w * sigma_t * sun_radiance * phase_oct[0];
+            let source = u.shape.w * sigma_t * (sun_radiance * (ms - single) + ambient);
+            radiance += transmittance * (source * (1.0 - step_t) / sigma_t + single_source * skin.x);
             depth_weighted += transmittance * (1.0 - step_t) * t;
             transmittance *= step_t;
             tau_view += sigma_t * dt;
             if (transmittance < u.march.z) {
                 // Early exit with an estimate of what the rest of the ray would add: the medium
-                // ahead taken as this sample's, without end (∫ T e^{-σt x} S dx = T S / σt), so
-                // the light the remaining weight T would have gathered is not dropped. The
+                // ahead taken as this sample's, without end (∫ T e^{-σt x} S dx = T S / σt; the
+                // single scattering from the step's end on, falling as in the step), so the
+                // light the remaining weight T would have gathered is not dropped. The
                 // transmittance is left as it is (the scene behind still shows through T).
-                radiance += transmittance * source / sigma_t;
+                radiance += transmittance * (source / sigma_t + single_source * skin.y);
                 stopped = true;
                 break;
             }
