@@ -407,10 +407,20 @@ fn the_largest_planet_radius_renders_the_slab_right() {
     slab_closed_form(nimbus::settings::MAX_PLANET_RADIUS);
 }
 
-fn slab_closed_form(radius: f32) {
-    let (bottom, top, extinction) = (1_000.0f32, 1_500.0f32, 0.004f32);
+/// The direction of the view ray through the centre of pixel (x, y) of a W × H image, from the
+/// camera at `eye` whose inverse view-projection is `inv`.
+fn pixel_ray(inv: Mat4, eye: Vec3, x: u32, y: u32) -> Vec3 {
+    let ndc_x = (x as f32 + 0.5) / W as f32 * 2.0 - 1.0;
+    let ndc_y = 1.0 - (y as f32 + 0.5) / H as f32 * 2.0;
+    let p = inv * Vec4::new(ndc_x, ndc_y, 0.0, 1.0);
+    (p.truncate() / p.w - eye).normalize()
+}
+
+/// A homogeneous debug slab between `bottom` and `top` (m) of extinction `extinction`, albedo 1,
+/// lit by the sun alone (ambient off) and marched with its single scattering only: the medium
+/// the closed forms of src/lighting/scattering.rs describe.
+fn single_scattering_slab(bottom: f32, top: f32, extinction: f32) -> Settings {
     let mut settings = small_noise(1);
-    settings.planet.radius = radius;
     settings.debug_density = DebugDensity::Slab {
         bottom_altitude: bottom,
         top_altitude: top,
@@ -424,6 +434,13 @@ fn slab_closed_form(radius: f32) {
     };
     settings.weather.ambient_top = Vec3::ZERO;
     settings.weather.ambient_bottom = Vec3::ZERO;
+    settings
+}
+
+fn slab_closed_form(radius: f32) {
+    let (bottom, top, extinction) = (1_000.0f32, 1_500.0f32, 0.004f32);
+    let mut settings = single_scattering_slab(bottom, top, extinction);
+    settings.planet.radius = radius;
     settings.lighting.light_distance = 100_000.0;
     settings.haze.fade_distance = f32::INFINITY;
     settings.march.min_steps = 256;
@@ -451,10 +468,7 @@ fn slab_closed_form(radius: f32) {
     let mut worst_t = 0.0f32;
     for y in 0..H {
         for x in 0..W {
-            let ndc_x = (x as f32 + 0.5) / W as f32 * 2.0 - 1.0;
-            let ndc_y = 1.0 - (y as f32 + 0.5) / H as f32 * 2.0;
-            let p = inv * Vec4::new(ndc_x, ndc_y, 0.0, 1.0);
-            let dir = (p.truncate() / p.w - eye).normalize();
+            let dir = pixel_ray(inv, eye, x, y);
             let (l, t) = slab_single_scattering(
                 extinction,
                 1.0,
@@ -483,20 +497,7 @@ fn slab_closed_form(radius: f32) {
 #[test]
 fn single_scattering_off_a_dense_slab_seen_from_above_matches_closed_form() {
     let (bottom, top, extinction) = (1_000.0f32, 1_500.0f32, 0.1f32);
-    let mut settings = small_noise(1);
-    settings.debug_density = DebugDensity::Slab {
-        bottom_altitude: bottom,
-        top_altitude: top,
-        density: 1.0,
-    };
-    settings.weather.clouds.extinction = extinction;
-    settings.weather.clouds.albedo = 1.0;
-    settings.lighting.multiple_scattering = MultipleScattering {
-        model: MultipleScatteringModel::SingleOnly,
-        ..Default::default()
-    };
-    settings.weather.ambient_top = Vec3::ZERO;
-    settings.weather.ambient_bottom = Vec3::ZERO;
+    let mut settings = single_scattering_slab(bottom, top, extinction);
     settings.haze.fade_distance = f32::INFINITY;
     settings.march.temporal = nimbus::Temporal::OFF;
     settings.march.resolution = nimbus::settings::TraceResolution::Full;
@@ -521,10 +522,7 @@ fn single_scattering_off_a_dense_slab_seen_from_above_matches_closed_form() {
     let mut ratios = Vec::new();
     for y in 0..H {
         for x in 0..W {
-            let ndc_x = (x as f32 + 0.5) / W as f32 * 2.0 - 1.0;
-            let ndc_y = 1.0 - (y as f32 + 0.5) / H as f32 * 2.0;
-            let p = inv * Vec4::new(ndc_x, ndc_y, 0.0, 1.0);
-            let dir = (p.truncate() / p.w - eye).normalize();
+            let dir = pixel_ray(inv, eye, x, y);
             let (l, _) = slab_single_reflection(
                 extinction,
                 1.0,

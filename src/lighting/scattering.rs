@@ -127,10 +127,13 @@ mod tests {
     /// and thick, at grazing and steep views.
     #[test]
     fn slab_reflection_closed_form_matches_its_integral() {
-        for (sigma_t, mu_v, mu_s) in [(0.002, 0.9, 0.5), (0.1, 0.34, 0.5), (0.04, 0.57, 0.87)] {
+        for (sigma_t, mu_v, mu_s) in [
+            (0.002f32, 0.9f32, 0.5f32),
+            (0.1, 0.34, 0.5),
+            (0.04, 0.57, 0.87),
+        ] {
             let h = 500.0f64;
-            let (l, t) =
-                slab_single_reflection(sigma_t as f32, 0.9, h as f32, mu_v, mu_s, 0.3, 2.0);
+            let (l, t) = slab_single_reflection(sigma_t, 0.9, h as f32, mu_v, mu_s, 0.3, 2.0);
             let (sigma_t, mu_v, mu_s) = (sigma_t as f64, mu_v as f64, mu_s as f64);
             let n = 200_000;
             let ds = h / mu_v / n as f64;
