@@ -171,7 +171,7 @@ fn column_below(p: vec3f, local_up: vec3f, sigma_t: f32, footprint: f32, jitter:
 // 1.42: the path tracer's near base is 1.8 times as bright, the march drew both alike
 // (docs/fidelity.md, 2026-12-06). The depth is spread up to SPREAD_LIMIT.
 fn spread_sun_depth(p: vec3f, tau: f32, n: u32, footprint: f32, jitter: f32, radius: f32) -> f32 {
-    let local_up = normalize(p + u.planet.xyz * u.planet.w);
+    let local_up = local_up_at(p);
     let side = normalize(cross(local_up, select(vec3f(0.0, 0.0, 1.0), vec3f(1.0, 0.0, 0.0), abs(local_up.z) > 0.9)));
     let ahead = cross(side, local_up);
     let angle = 2.0 * PI * jitter;
@@ -247,7 +247,7 @@ fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, tau_diffuse: f32, sigma_t: f
         }
         return vec2f(light, 0.5);
     }
-    let local_up = normalize(p + u.planet.xyz * u.planet.w);
+    let local_up = local_up_at(p);
     let mu0 = max(dot(u.sun.xyz, local_up), DE_MIN_MU0);
     let mu_view = dot(dir, local_up);
     // The column below is the probe's, whichever way the camera looks. Until 2026-12-05 a
@@ -285,6 +285,12 @@ fn column_light(p: vec3f, dir: vec3f, tau_sun: f32, tau_diffuse: f32, sigma_t: f
     return vec2f(light, ambient_share);
 }
 
+// The local vertical at p (the planet's centre lies u.planet.w below the origin along
+// u.planet.xyz).
+fn local_up_at(p: vec3f) -> vec3f {
+    return normalize(p + u.planet.xyz * u.planet.w);
+}
+
 // How fast (1/m) the sun's optical depth grows along the view ray at p, whose extinction is
 // sigma_t: in a layer lit from above, τ_sun is the depth below the sunlit top over μ0, so it
 // grows by sigma_t (-dir · up) / μ0 per metre (exact in the debug slab; for the noise model the
@@ -294,7 +300,7 @@ fn skin_rate(p: vec3f, dir: vec3f, sigma_t: f32) -> f32 {
     if (debug_mode() == DEBUG_SPHERE) {
         return 0.0;
     }
-    let local_up = normalize(p + u.planet.xyz * u.planet.w);
+    let local_up = local_up_at(p);
     let mu0 = max(dot(u.sun.xyz, local_up), DE_MIN_MU0);
     return sigma_t * -dot(dir, local_up) / mu0;
 }
@@ -539,11 +545,11 @@ fn march_layer(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32
             }
             let sigma_t = density * u.shape.z;
             let tau = sun_optical_depth(p, light_step_count(t), footprint, 1e30);
-            // Wrenninge 2015 multiple-scattering octaves. The first (single scattering) out of
-            // the loop: the others index phase_oct by the loop counter, which a software
-            // rasteriser gathers from scratch memory lane by lane.
-            let single = phase_oct[0] * exp(-tau);
-            var ms = single;
+            // Wrenninge 2015 multiple-scattering octaves. The first (single scattering,
+            // phase_oct[0] e^{-tau}) is integrated apart (skin_step); `ms` holds the others, and
+            // the loop indexes phase_oct by its counter, which a software rasteriser gathers from
+            // scratch memory lane by lane.
+            var ms = 0.0;
             var a_i = u.ms.y;
             var b_i = u.ms.z;
             for (var o = 1u; o < octaves; o++) {
@@ -578,7 +584,7 @@ fn march_layer(cam: vec3f, dir: vec3f, max_t: f32, jitter: f32, pixel_angle: f32
             let step_t = exp(-sigma_t * dt);
             let skin = skin_step(tau, skin_rate(p, dir, sigma_t), s - total * pow(x0, power), dt, sigma_t);
             let single_source = u.shape.w * sigma_t * sun_radiance * phase_oct[0];
-            let source = u.shape.w * sigma_t * (sun_radiance * (ms - single) + ambient);
+            let source = u.shape.w * sigma_t * (sun_radiance * ms + ambient);
             radiance += transmittance * (source * (1.0 - step_t) / sigma_t + single_source * skin.x);
             depth_weighted += transmittance * (1.0 - step_t) * t;
             transmittance *= step_t;
