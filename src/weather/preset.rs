@@ -158,12 +158,16 @@ impl Default for CloudShape {
             // 0.999 leaves room for haze and soot. With the delta-Eddington model albedo
             // matters in thick clouds as in the path tracer (τ 50: ω 0.999 -> 1 is +32%).
             albedo: 0.999,
-            // Eroding 0.7 deep (of the base shape's range) gives cumulus their billows: the
-            // cumuliform base shape rises five times as steeply as before it was stretched
-            // (profile.rs, `CARVED_RANGE`), so 0.35 left only shallow bumps.
-            detail_strength: 0.7,
+            // Eroding the whole depth of the base shape's range lets the detail cells carve
+            // the cumuliform base (which rises five times as steeply as before it was
+            // stretched: profile.rs, `CARVED_RANGE`) into separate billows; 0.35 left shallow
+            // bumps and 0.7 soft dents.
+            detail_strength: 1.0,
             layer_softness: 0.1,
-            edge_sharpness: 1.0,
+            // A ramp a quarter as wide: bodies of nearly uniform density whose eroded edges
+            // are crisp cauliflower billows (Schneider 2015's images), where 1 gave soft cotton
+            // blobs whose look no march setting changed (issue 11, point 5).
+            edge_sharpness: 4.0,
         }
     }
 }
@@ -348,6 +352,9 @@ impl Weather {
                 density: 1.2,
                 detail_strength: 0.2,
                 layer_softness: 0.15,
+                // A stratus deck's underside is soft: the cumulus' crisp billows would print
+                // its base as a field of hard-edged lumps.
+                edge_sharpness: 1.0,
                 ..CloudShape::default()
             },
             map: WeatherMap {
@@ -374,12 +381,14 @@ impl Weather {
                 top_altitude: 9_000.0,
             },
             // Towers carved by their noise (profile.rs, `CARVED_RANGE`) are thinner where the
-            // noise is low: coverage 0.9 and density 1.6 (0.8 and 1.2 before) keep the deck as
-            // dark from below (a 50° view up from the ground: mean 109 against 116 of 255; 156
-            // without) with the towers' dark cores and lighter gaps between them.
+            // noise is low: coverage 0.9 (0.8 before) keeps the deck closed. Sharpened edges
+            // (`edge_sharpness` 4) fill the towers' bodies to full density, so density 1.0
+            // (1.6 with soft edges) gives a dark deck with the towers' darker cores and lighter
+            // gaps between them: the contact sheet's ground view has mean 85 of 255 (65 at 1.6;
+            // 139 with soft edges, a grey that read as overcast rather than storm).
             clouds: CloudShape {
                 coverage: 0.9,
-                density: 1.6,
+                density: 1.0,
                 extinction: 0.05,
                 // Storm towers lift dust and soot: a little more absorption than fair cumulus.
                 albedo: 0.995,

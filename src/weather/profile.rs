@@ -451,8 +451,11 @@ mod tests {
 
     #[test]
     fn detail_only_erodes() {
+        // Unsharpened: edge sharpness fills the eroded ramp up to full density on purpose
+        // (edge_sharpness_crisps_the_edge_without_moving_it).
         let shape = CloudShape {
             coverage: 0.8,
+            edge_sharpness: 1.0,
             ..CloudShape::default()
         };
         for h in [0.1, 0.2, 0.5] {
@@ -504,7 +507,10 @@ mod tests {
             "{inside} in cloud, {capped} capped"
         );
         // The cloud model's entry point passes the preset's sharpness through.
-        let soft = CloudShape::default();
+        let soft = CloudShape {
+            edge_sharpness: 1.0,
+            ..CloudShape::default()
+        };
         let sharp = CloudShape {
             edge_sharpness: 3.0,
             ..soft
