@@ -1702,7 +1702,45 @@ fn main() -> Result<(), String> {
              optical depth straight up when that is less than the sun's projected (a light march\n\
              upward): sparse from the ground 0.090 -> 0.101, up close 0.791 -> 0.779. In the view\n\
              from 12 km the far rows (15-60 km away) are 0.85-0.92 of the path tracer and rows\n\
-             nearer 1.07-1.14: errors of both signs, at every quality level (Ultra 0.116).\n",
+             nearer 1.07-1.14: errors of both signs, at every quality level (Ultra 0.116).\n\n\
+             The single scattering's step (2026-12-07, nineteenth session). Hillaire's step integral\n\
+             holds a sample's source over its step. Seen from the sun's side, a dense medium's lit\n\
+             skin lies within one step (the τ = 50 slab: σt 0.1 /m, steps of about 20 m), and the\n\
+             sun's light at a sample partway in stood for the whole step: from above, single\n\
+             scattering (`--single`) came out 0.70-0.91 of the closed form at τ = 50 and 0.93-0.98\n\
+             at τ = 20, and crisp cumulus from 12 km 1.245 of the path tracer's first order (coarse\n\
+             steps the other way). The march now integrates e^(-σt x - τ_sun(x)) over each step,\n\
+             exactly where τ_sun is linear along it, at the layer's rate σt (-d · up) / μ0\n\
+             (`skin_step`), and the early exit's remainder falls off the same way: 0.999-1.002 at\n\
+             τ = 50, 1.000-1.002 at τ = 20, 0.999 on the crisp view from 12 km (FLIP 0.077 -> 0.050\n\
+             against its first-order reference). A test holds a τ = 50 slab seen from above to the\n\
+             closed form (`lighting::scattering::slab_single_reflection`: mean and median pixel\n\
+             within 1%; 0.784 / 0.677 before). The slabs seen from below and the spheres did not\n\
+             move; from above, all orders rose by up to 0.04 at τ = 20 and 50, and the views 20°\n\
+             toward the sun at τ = 50, already too bright, went to 1.20-1.23: with the first order\n\
+             exact there, that error is the multiple-scattering model's.\n\n\
+             Crisp cumulus, lit through their walls (2026-12-07, twentieth session). Issue 11's\n\
+             point 5: near cumulus read as soft cotton blobs, the same at every quality level. The\n\
+             presets' cumulus now erode the base shape's whole depth (`detail_strength` 1, was 0.7)\n\
+             and sharpen the eroded ramp four times (`edge_sharpness` 4, was 1; the overcast deck\n\
+             keeps 1, and stormy's density went from 1.6 to 1.0 to keep its deck as dark): crisp\n\
+             billows on bodies of nearly uniform density, in the march and the path tracer alike\n\
+             (the close-up row, `sparse_closeup.png`). Their sunlit walls came out too dark: lit\n\
+             through the top alone, from 12 km (sun 40° high behind the camera, which sees their\n\
+             sunward walls) 0.840 of the path tracer (FLIP 0.131), up close (sun 30° high, from the\n\
+             side) 0.775 (FLIP 0.105). A cloud with sides takes the sun through its sunward wall as\n\
+             well as its top, and under a sun below 45° more squarely: its column is now lit at the\n\
+             mean of the two faces' cosines, the wall weighted by the cloud's height over its width\n\
+             (`lit_face_cosine`: the layer's thickness over the column's diameter at the layer's\n\
+             coverage, 0.6 for fair cumulus, 0.03 for the overcast deck; the debug media keep the\n\
+             top's cosine): 0.949 (FLIP 0.113) from 12 km and 0.952 (0.100) up close; from the\n\
+             ground (sun 55°) 0.988 (0.078) and the overcast deck the same as before. The wall's\n\
+             cosine alone where it is larger overshot (1.021 / 0.107 and 1.070 / 0.108, the lit walls\n\
+             up close 1.3-1.9 times too bright), half the weight fell short (0.931 / 0.115 and\n\
+             0.923 / 0.099). What is left from 12 km is at the scale of the 64×36 image's pixels: the\n\
+             far clouds are a few pixels across, too bright on one and too dark on the next (by\n\
+             rows, the far ones 0.73-0.79 of the path tracer and the nearest 1.08), and Ultra scores\n\
+             worse there (0.135).\n",
         );
         md.push_str("\n## Pictures\n\n");
         let mut names: Vec<String> = std::fs::read_dir(&dir)
