@@ -443,20 +443,35 @@ mod store {
             }
         }
         // A partial run keeps the lines of the chunks it did not touch.
+        let stored = manifest_lines(&dir);
         let mut lines = if whole {
             BTreeMap::new()
         } else {
-            manifest_lines(&dir)
+            stored.clone()
         };
         lines.extend(used.clone());
+        // A whole run keeps the other seeds of the references it read: a run at a lower sample
+        // count reads a reference's first chunks, and the later ones (traced toward a higher
+        // count, as the overcast deck's are across sessions) are that reference's too. On
+        // 2026-12-07 a run at 2048 overcast samples dropped 2 of the 4 chunks of its 8192.
+        let used_references: std::collections::BTreeSet<String> =
+            used.values().map(|line| reference_of(line)).collect();
         let mut removed = 0;
         if whole {
             for entry in std::fs::read_dir(&dir).map_err(|e| e.to_string())? {
                 let name = entry.map_err(|e| e.to_string())?.file_name();
                 let name = name.to_string_lossy();
-                if name.ends_with(".bin") && !used.contains_key(name.as_ref()) {
-                    std::fs::remove_file(dir.join(name.as_ref())).map_err(|e| e.to_string())?;
-                    removed += 1;
+                if !name.ends_with(".bin") || used.contains_key(name.as_ref()) {
+                    continue;
+                }
+                match stored.get(name.as_ref()) {
+                    Some(line) if used_references.contains(&reference_of(line)) => {
+                        lines.insert(name.to_string(), line.clone());
+                    }
+                    _ => {
+                        std::fs::remove_file(dir.join(name.as_ref())).map_err(|e| e.to_string())?;
+                        removed += 1;
+                    }
                 }
             }
         }
@@ -467,6 +482,16 @@ mod store {
             lines.len()
         )))
     }
+    /// What reference a manifest line's chunk is part of: the line without its file name and
+    /// its seed (the medium, the view, the size and the samples per chunk).
+    fn reference_of(line: &str) -> String {
+        let fields: Vec<&str> = line.split('\t').collect();
+        match fields.len() {
+            n if n > 2 => fields[1..n - 1].join("\t"),
+            _ => line.to_string(),
+        }
+    }
+
     /// Adds the line of one chunk just written to the store to its manifest.
     pub(super) fn record(name: &str) -> Result<(), String> {
         let line = USED.lock().map_err(|e| e.to_string())?.get(name).cloned();
