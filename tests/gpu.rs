@@ -1338,11 +1338,7 @@ fn reduced_resolution_keeps_occluders_exact_and_stays_close_to_full() {
         // (the walls lit by a low sun, `lit_face_cosine`, 2026-12-07: half 0.069 -> 0.084,
         // quarter 0.093 -> 0.112 of the level, 0.021 -> 0.028 and 0.029 -> 0.038 absolute).
         let mean = diff / full.len() as f64;
-        let level = full
-            .iter()
-            .map(|p| (p[0] + p[1] + p[2]) as f64 / 3.0)
-            .sum::<f64>()
-            / full.len() as f64;
+        let level = common::mean_level(&full);
         let budget = match resolution {
             TraceResolution::Half => 0.09,
             _ => 0.12,

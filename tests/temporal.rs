@@ -174,11 +174,7 @@ fn occluders_stay_exact_and_motion_does_not_smear() {
     full.render(&last.frame(W, H, 19.0 / 30.0)).unwrap();
     let reference = full.read_output().unwrap();
     let mean = mean_difference(&reference, &h.read_output().unwrap());
-    let level = reference
-        .iter()
-        .map(|p| (p[0] + p[1] + p[2]) as f64 / 3.0)
-        .sum::<f64>()
-        / reference.len() as f64;
+    let level = common::mean_level(&reference);
     println!("panned: mean difference {mean:.4}, mean level {level:.4}");
     // Relative to the picture's mean level: the reprojection's loss scales with the clouds'
     // contrast, which a change of lighting moves with nothing in the machinery changing (the

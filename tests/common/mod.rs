@@ -85,6 +85,17 @@ pub fn f16(v: f32) -> f32 {
     half::f16::from_f32(v).to_f32()
 }
 
+/// The mean of an image's RGB channels over all pixels: the level a machinery test's budget
+/// scales with, since the loss of a reduced grid or a reprojection grows with the clouds'
+/// brightness and contrast.
+pub fn mean_level(pixels: &[[f32; 4]]) -> f64 {
+    pixels
+        .iter()
+        .map(|p| (p[0] + p[1] + p[2]) as f64 / 3.0)
+        .sum::<f64>()
+        / pixels.len() as f64
+}
+
 /// Pixels as RGBA16F bytes (for uploads).
 pub fn halfs(pixels: &[[f32; 4]]) -> Vec<u8> {
     pixels
